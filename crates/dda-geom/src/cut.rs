@@ -1,0 +1,263 @@
+//! Cutting: a convex polygon split by a line, and a convex region cut into blocks by joint
+//! sets (families of parallel lines), as a jointed rock mass is generated.
+//!
+//! A split of a convex polygon yields at most two convex pieces. Pieces whose area is below
+//! a caller's threshold (slivers) are dropped and counted, so generated block systems do not
+//! carry blocks no time step could resolve.
+
+use crate::error::{JointSetError, PolygonError};
+use crate::polygon::{ConvexPolygon, DEFAULT_REL_TOL};
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+
+/// The line of points x with `normal . x = offset`; `normal` is a unit vector.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Line {
+    /// Unit normal.
+    pub normal: DVec2,
+    /// Signed distance of the line from the origin along `normal`.
+    pub offset: f64,
+}
+
+impl Line {
+    /// The line through `point` along `direction` (any non-zero length).
+    pub fn through(point: DVec2, direction: DVec2) -> Self {
+        let d = direction.normalize();
+        let normal = DVec2::new(-d.y, d.x);
+        Line {
+            normal,
+            offset: normal.dot(point),
+        }
+    }
+}
+
+/// The two sides of a polygon split by a line.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Split {
+    /// The piece where `normal . x <= offset`, if it has area.
+    pub below: Option<ConvexPolygon>,
+    /// The piece where `normal . x >= offset`, if it has area.
+    pub above: Option<ConvexPolygon>,
+}
+
+/// Removes consecutive points closer than `eps` (the intersection of a line passing within
+/// `eps` of a vertex); returns `None` when fewer than three remain.
+fn clean(mut pts: Vec<DVec2>, eps: f64) -> Option<Vec<DVec2>> {
+    pts.dedup_by(|q, p| p.distance(*q) <= eps);
+    while pts.len() >= 2 && pts[0].distance(pts[pts.len() - 1]) <= eps {
+        pts.pop();
+    }
+    (pts.len() >= 3).then_some(pts)
+}
+
+/// Validates one side of a split: degenerate sides (no area) become `None`.
+fn piece(pts: Vec<DVec2>, eps: f64) -> Result<Option<ConvexPolygon>, PolygonError> {
+    let Some(pts) = clean(pts, eps) else {
+        return Ok(None);
+    };
+    match ConvexPolygon::new(pts) {
+        Ok(p) => Ok(Some(p)),
+        Err(PolygonError::ZeroArea | PolygonError::TooFewVertices { .. }) => Ok(None),
+        Err(e) => Err(e),
+    }
+}
+
+/// Splits a convex polygon by a line. Vertices exactly on the line go to both sides; a side
+/// without area is `None`. The pieces' areas add up to the polygon's to rounding.
+pub fn split(poly: &ConvexPolygon, line: &Line) -> Result<Split, PolygonError> {
+    let v = poly.vertices();
+    let n = v.len();
+    // Distances relative to the first vertex, to keep them accurate far from the origin.
+    let base = line.normal.dot(v[0]) - line.offset;
+    let s: Vec<f64> = v
+        .iter()
+        .map(|&p| base + line.normal.dot(p - v[0]))
+        .collect();
+    let (mut below, mut above) = (Vec::with_capacity(n + 1), Vec::with_capacity(n + 1));
+    for i in 0..n {
+        let j = (i + 1) % n;
+        if s[i] <= 0.0 {
+            below.push(v[i]);
+        }
+        if s[i] >= 0.0 {
+            above.push(v[i]);
+        }
+        if (s[i] < 0.0 && s[j] > 0.0) || (s[i] > 0.0 && s[j] < 0.0) {
+            let x = v[i] + (v[j] - v[i]) * (s[i] / (s[i] - s[j]));
+            below.push(x);
+            above.push(x);
+        }
+    }
+    let eps = DEFAULT_REL_TOL * poly.aabb().size().length();
+    let below = if s.iter().any(|&x| x < 0.0) {
+        piece(below, eps)?
+    } else {
+        None
+    };
+    let above = if s.iter().any(|&x| x > 0.0) {
+        piece(above, eps)?
+    } else {
+        None
+    };
+    Ok(Split { below, above })
+}
+
+/// A joint set: parallel lines at dip angle `dip_deg` (degrees, counter-clockwise from
+/// the +x axis, so 60 dips up to the right), `spacing` apart, one of them at signed
+/// distance `offset` from the origin along the set's normal (-sin dip, cos dip).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JointSet {
+    /// Dip angle in degrees from the +x axis.
+    pub dip_deg: f64,
+    /// Perpendicular distance between neighbouring joints.
+    pub spacing: f64,
+    /// Position of one joint along the normal.
+    pub offset: f64,
+}
+
+impl JointSet {
+    /// Unit normal of the set's lines.
+    pub fn normal(&self) -> DVec2 {
+        let (s, c) = self.dip_deg.to_radians().sin_cos();
+        DVec2::new(-s, c)
+    }
+}
+
+/// The blocks a region was cut into, and what was dropped.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cutting {
+    /// The blocks, in a deterministic order.
+    pub blocks: Vec<ConvexPolygon>,
+    /// How many slivers (pieces below the area threshold) were dropped.
+    pub dropped: usize,
+    /// Their total area.
+    pub dropped_area: f64,
+}
+
+/// Cuts a convex region by joint sets into convex blocks; pieces with area below
+/// `min_area` are dropped and counted. Each piece is cut only by the joints crossing it.
+pub fn cut_by_joint_sets(
+    region: &ConvexPolygon,
+    sets: &[JointSet],
+    min_area: f64,
+) -> Result<Cutting, JointSetError> {
+    if !(min_area.is_finite() && min_area >= 0.0) {
+        return Err(JointSetError::MinArea { min_area });
+    }
+    for (k, set) in sets.iter().enumerate() {
+        if !(set.dip_deg.is_finite() && set.offset.is_finite()) {
+            return Err(JointSetError::NonFinite { set: k });
+        }
+        if !(set.spacing.is_finite() && set.spacing > 0.0) {
+            return Err(JointSetError::Spacing {
+                set: k,
+                spacing: set.spacing,
+            });
+        }
+    }
+    let mut out = Cutting {
+        blocks: vec![region.clone()],
+        dropped: 0,
+        dropped_area: 0.0,
+    };
+    for (set_index, set) in sets.iter().enumerate() {
+        let normal = set.normal();
+        let mut next = Vec::with_capacity(out.blocks.len() * 2);
+        for block in out.blocks.drain(..) {
+            let (lo, hi) = block
+                .vertices()
+                .iter()
+                .map(|&p| normal.dot(p))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+                    (lo.min(x), hi.max(x))
+                });
+            let first = ((lo - set.offset) / set.spacing).ceil() as i64;
+            let last = ((hi - set.offset) / set.spacing).floor() as i64;
+            let mut rest = Some(block);
+            for k in first..=last {
+                let Some(current) = rest.take() else { break };
+                let line = Line {
+                    normal,
+                    offset: set.offset + k as f64 * set.spacing,
+                };
+                // Joints through a corner or along an edge leave one side empty.
+                let sp = split(&current, &line).map_err(|error| JointSetError::Piece {
+                    set: set_index,
+                    error,
+                })?;
+                if let Some(b) = sp.below {
+                    next.push(b);
+                }
+                rest = sp.above;
+            }
+            if let Some(b) = rest {
+                next.push(b);
+            }
+        }
+        out.blocks = next;
+    }
+    let (keep, drop): (Vec<_>, Vec<_>) = out.blocks.into_iter().partition(|b| b.area() >= min_area);
+    out.dropped = drop.len();
+    out.dropped_area = drop.iter().map(ConvexPolygon::area).sum();
+    out.blocks = keep;
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn split_square_diagonally() {
+        let sq = ConvexPolygon::from_coords(&[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+            .expect("valid");
+        let sp = split(&sq, &Line::through(DVec2::ZERO, DVec2::new(1.0, 1.0))).expect("split");
+        let (b, a) = (sp.below.expect("below"), sp.above.expect("above"));
+        assert_eq!(b.len(), 3);
+        assert_eq!(a.len(), 3);
+        assert!((a.area() - 0.5).abs() < 1e-15 && (b.area() - 0.5).abs() < 1e-15);
+        // A line along an edge leaves one side empty.
+        let sp = split(&sq, &Line::through(DVec2::ZERO, DVec2::X)).expect("split");
+        assert!(sp.below.is_none());
+        assert_eq!(sp.above.expect("above").len(), 4);
+    }
+
+    #[test]
+    fn grid_of_squares() {
+        let region = ConvexPolygon::from_coords(&[[0.0, 0.0], [4.0, 0.0], [4.0, 2.0], [0.0, 2.0]])
+            .expect("valid");
+        let sets = [
+            JointSet {
+                dip_deg: 0.0,
+                spacing: 1.0,
+                offset: 0.0,
+            },
+            JointSet {
+                dip_deg: 90.0,
+                spacing: 1.0,
+                offset: 0.0,
+            },
+        ];
+        let c = cut_by_joint_sets(&region, &sets, 1e-6).expect("cut");
+        assert_eq!(c.blocks.len(), 8);
+        assert_eq!(c.dropped, 0);
+        for b in &c.blocks {
+            assert!((b.area() - 1.0).abs() < 1e-12);
+        }
+        assert_eq!(
+            cut_by_joint_sets(
+                &region,
+                &[JointSet {
+                    dip_deg: 0.0,
+                    spacing: 0.0,
+                    offset: 0.0
+                }],
+                0.0
+            ),
+            Err(JointSetError::Spacing {
+                set: 0,
+                spacing: 0.0
+            })
+        );
+    }
+}

@@ -1,0 +1,8 @@
+//! dda-rs: Discontinuous Deformation Analysis of 2D convex polygonal rock blocks with
+//! pluggable contact detection (cover-based, after Zhuang, Zheng et al. 2021, and the two
+//! conventional type-based detectors).
+//!
+//! This facade re-exports the layers; each can also be used alone:
+//! - [`geom`]: convex polygons, entrance blocks, cutting by joint sets.
+
+pub use dda_geom as geom;
