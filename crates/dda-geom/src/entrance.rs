@@ -89,41 +89,46 @@ pub fn for_each_face(
 ) {
     let (av, bv) = (a.vertices(), b.vertices());
     let (na, nb) = (av.len(), bv.len());
-    let (ka0, jb0) = (start_vertex(av, -1.0), start_vertex(bv, 1.0));
-    let (mut ka, mut jb) = (0, 0); // edges of -A and of B taken so far
-    let mut point = bv[jb0] - av[ka0] + a0;
-    while ka < na || jb < nb {
-        let j = (jb0 + jb) % nb;
-        let i = (ka0 + ka) % na;
-        let take_b = if ka == na {
-            true
-        } else if jb == nb {
-            false
-        } else {
-            let db = bv[(j + 1) % nb] - bv[j];
-            let da = av[i] - av[(i + 1) % na];
-            not_after(db, da)
-        };
-        if take_b {
-            let next = point + (bv[(j + 1) % nb] - bv[j]);
+    // Current vertex of A (in -A) and of B, and the edges leaving them; indices wrap by
+    // comparison, not by `%`, which would cost an integer division per face.
+    let (mut i, mut j) = (start_vertex(av, -1.0), start_vertex(bv, 1.0));
+    let (mut i1, mut j1) = (wrap(i + 1, na), wrap(j + 1, nb));
+    let mut da = av[i] - av[i1];
+    let mut db = bv[j1] - bv[j];
+    let (mut left_a, mut left_b) = (na, nb);
+    let mut point = bv[j] - av[i] + a0;
+    while left_a + left_b > 0 {
+        if left_a == 0 || (left_b > 0 && not_after(db, da)) {
+            let next = point + db;
             f(EntranceFace {
                 start: point,
                 end: next,
                 source: CoverSource::VertexEdge { vertex: i, edge: j },
             });
             point = next;
-            jb += 1;
+            left_b -= 1;
+            j = j1;
+            j1 = wrap(j1 + 1, nb);
+            db = bv[j1] - bv[j];
         } else {
-            let next = point + (av[i] - av[(i + 1) % na]);
+            let next = point + da;
             f(EntranceFace {
                 start: point,
                 end: next,
                 source: CoverSource::EdgeVertex { edge: i, vertex: j },
             });
             point = next;
-            ka += 1;
+            left_a -= 1;
+            i = i1;
+            i1 = wrap(i1 + 1, na);
+            da = av[i] - av[i1];
         }
     }
+}
+
+#[inline(always)]
+fn wrap(k: usize, n: usize) -> usize {
+    if k >= n { k - n } else { k }
 }
 
 impl EntranceBlock {
@@ -167,11 +172,17 @@ impl EntranceBlock {
 
     /// Signed distance from a0 to E (see [`signed_distance`]).
     pub fn signed_distance(&self) -> SignedDistance {
-        let mut acc = DistanceAcc::new(self.reference);
-        for f in &self.faces {
-            acc.add(f);
+        let mut sat = SatMax::new(self.reference);
+        let mut k = 0;
+        for (n, f) in self.faces.iter().enumerate() {
+            let before = sat.face;
+            sat.add(f);
+            if sat.face != before {
+                k = n;
+            }
         }
-        acc.finish()
+        let m = self.faces.len();
+        sat.finish([self.faces[(k + m - 1) % m], self.faces[(k + 1) % m]])
     }
 }
 
@@ -186,74 +197,128 @@ pub struct SignedDistance {
     pub source: CoverSource,
 }
 
-/// Folds faces into the signed distance of a point from a convex polygon.
-struct DistanceAcc {
+/// The face of E with the largest outward distance h of the point p (a separating-axis
+/// maximum), found without square roots or divisions: h1 > h2 is compared as
+/// c1|c1| dd2 > c2|c2| dd1 with c = |d| h and dd = |d|^2 for face direction d.
+struct SatMax {
     p: DVec2,
-    /// Largest outward distance of p over all face lines, and its face.
-    max_h: f64,
-    max_src: Option<CoverSource>,
-    /// Smallest squared distance to a face segment among faces p is outside of.
-    min_d2: f64,
-    min_src: Option<CoverSource>,
+    face: EntranceFace,
+    c: f64,
+    dd: f64,
 }
 
-impl DistanceAcc {
+impl SatMax {
     #[inline]
     fn new(p: DVec2) -> Self {
-        DistanceAcc {
+        SatMax {
             p,
-            max_h: f64::NEG_INFINITY,
-            max_src: None,
-            min_d2: f64::INFINITY,
-            min_src: None,
+            face: EntranceFace {
+                start: DVec2::ZERO,
+                end: DVec2::ZERO,
+                source: CoverSource::VertexEdge { vertex: 0, edge: 0 },
+            },
+            // Any real face (dd > 0) compares better than c = -1, dd = 0.
+            c: -1.0,
+            dd: 0.0,
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn add(&mut self, f: &EntranceFace) {
         let d = f.end - f.start;
         let w = self.p - f.start;
         let dd = d.dot(d);
-        let c = w.x * d.y - w.y * d.x; // |d| times the outward distance
-        let h = c / dd.sqrt();
-        if h > self.max_h {
-            self.max_h = h;
-            self.max_src = Some(f.source);
-        }
-        if c > 0.0 {
-            let t = (w.dot(d) / dd).clamp(0.0, 1.0);
-            let d2 = (w - d * t).length_squared();
-            if d2 < self.min_d2 {
-                self.min_d2 = d2;
-                self.min_src = Some(f.source);
-            }
+        let c = w.x * d.y - w.y * d.x;
+        if c * c.abs() * self.dd > self.c * self.c.abs() * dd {
+            *self = SatMax {
+                p: self.p,
+                face: *f,
+                c,
+                dd,
+            };
         }
     }
 
+    /// Signed distance, given the segments that may hold the nearest point when p is
+    /// outside: the best face's neighbours on E (or any superset of segments inside E).
+    ///
+    /// If p is inside, the best h is the signed distance (shortest exit). If p is outside,
+    /// the nearest point of E lies on the best face or, when it is a vertex, at an end of
+    /// it (the faces next to the nearest vertex maximise h); a collinear neighbour (parallel
+    /// edges of A and B) can tie, hence the neighbours. Segments inside E never come nearer
+    /// than E itself, so extra candidates do no harm.
     #[inline]
-    fn finish(self) -> SignedDistance {
-        let fallback = CoverSource::VertexEdge { vertex: 0, edge: 0 };
-        if self.max_h > 0.0 {
-            SignedDistance {
-                distance: self.min_d2.sqrt(),
-                source: self.min_src.unwrap_or(fallback),
-            }
-        } else {
-            SignedDistance {
-                distance: self.max_h,
-                source: self.max_src.unwrap_or(fallback),
+    fn finish(self, neighbours: impl IntoIterator<Item = EntranceFace>) -> SignedDistance {
+        if self.c <= 0.0 {
+            return SignedDistance {
+                distance: self.c / self.dd.sqrt(),
+                source: self.face.source,
+            };
+        }
+        let seg_d2 = |f: &EntranceFace| {
+            let d = f.end - f.start;
+            let w = self.p - f.start;
+            let t = (w.dot(d) / d.dot(d)).clamp(0.0, 1.0);
+            (w - d * t).length_squared()
+        };
+        let mut best = (seg_d2(&self.face), self.face.source);
+        for g in neighbours {
+            let d2 = seg_d2(&g);
+            if d2 < best.0 {
+                best = (d2, g.source);
             }
         }
+        SignedDistance {
+            distance: best.0.sqrt(),
+            source: best.1,
+        }
     }
+}
+
+/// The segments of B - A + a0 that can precede or follow `face` on the boundary of E: the
+/// two faces sharing each of its ends. Each is a subset of E whether or not it is a face.
+fn around(
+    a: &ConvexPolygon,
+    b: &ConvexPolygon,
+    a0: DVec2,
+    face: &EntranceFace,
+) -> [EntranceFace; 4] {
+    let (na, nb) = (a.len(), b.len());
+    let (i, j) = match face.source {
+        CoverSource::VertexEdge { vertex, edge } => (vertex, edge),
+        CoverSource::EdgeVertex { edge, vertex } => (edge, vertex),
+    };
+    let ve = |vertex: usize, edge: usize| EntranceFace {
+        start: b.vertex(edge) - a.vertex(vertex) + a0,
+        end: b.vertex(edge + 1) - a.vertex(vertex) + a0,
+        source: CoverSource::VertexEdge { vertex, edge },
+    };
+    let ev = |edge: usize, vertex: usize| EntranceFace {
+        start: b.vertex(vertex) - a.vertex(edge) + a0,
+        end: b.vertex(vertex) - a.vertex(edge + 1) + a0,
+        source: CoverSource::EdgeVertex { edge, vertex },
+    };
+    // A face's start is b_j - a_i; its end is b_j+1 - a_i (VE) or b_j - a_i+1 (EV).
+    let (ie, je) = match face.source {
+        CoverSource::VertexEdge { .. } => (i, (j + 1) % nb),
+        CoverSource::EdgeVertex { .. } => ((i + 1) % na, j),
+    };
+    [
+        ve(i, (j + nb - 1) % nb),
+        ev((i + na - 1) % na, j),
+        ve(ie, je),
+        ev(ie, je),
+    ]
 }
 
 /// Signed distance between convex polygons A and B through their entrance block: the gap
 /// when apart, minus the penetration depth when overlapping, with the face realising it.
 /// O(n + m), no allocation.
 pub fn signed_distance(a: &ConvexPolygon, b: &ConvexPolygon) -> SignedDistance {
-    let mut acc = DistanceAcc::new(DVec2::ZERO);
-    for_each_face(a, b, DVec2::ZERO, |f| acc.add(&f));
-    acc.finish()
+    let mut sat = SatMax::new(DVec2::ZERO);
+    for_each_face(a, b, DVec2::ZERO, |f| sat.add(&f));
+    let near = around(a, b, DVec2::ZERO, &sat.face);
+    sat.finish(near)
 }
 
 /// d_RE (paper eq. 2): distance from a0 to the entrance block, i.e. between A and B; zero
@@ -302,6 +367,21 @@ mod tests {
         assert_eq!(s.source, CoverSource::VertexEdge { vertex: 0, edge: 2 });
         assert_eq!(d_re(&a, &b), 0.0);
         assert!((d_re1(&a, &b).0 - 0.2).abs() < 1e-15);
+    }
+
+    #[test]
+    fn parallel_edges_tie() {
+        // A unit square 1 above a wider block, slid along it: the gap is 1 wherever it
+        // is, though the nearest face of E may be either of two collinear faces.
+        let b = poly(&[[0.5, 0.0], [3.0, 0.0], [3.0, 1.0], [0.5, 1.0]]);
+        for k in 0..=40 {
+            let x = -0.45 + 0.07 * k as f64;
+            let a = poly(&[[x, 2.0], [x + 1.0, 2.0], [x + 1.0, 3.0], [x, 3.0]]);
+            let s = signed_distance(&a, &b);
+            let e = EntranceBlock::new(&a, &b, DVec2::ZERO).signed_distance();
+            assert!((s.distance - 1.0).abs() < 1e-14, "x = {x}: {}", s.distance);
+            assert!((e.distance - 1.0).abs() < 1e-14, "x = {x}: {}", e.distance);
+        }
     }
 
     #[test]

@@ -171,6 +171,9 @@ proptest! {
     #[test]
     fn signed_distance_matches_parry((a, b) in near_pair()) {
         let ours = signed_distance(&a, &b).distance;
+        // The materialised entrance block gives the same answer.
+        let e = EntranceBlock::new(&a, &b, DVec2::ZERO).signed_distance().distance;
+        prop_assert!((e - ours).abs() <= 1e-12 * extent(&a, &b));
         let id = Pose::identity();
         let (pa, pb) = (to_parry(&a), to_parry(&b));
         let tol = |x: f64| 1e-9 * x.abs() + 1e-12 * extent(&a, &b);
