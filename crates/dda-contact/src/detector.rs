@@ -1,0 +1,249 @@
+//! The [`ContactDetector`] trait and the two drivers every detector shares: step-start
+//! detection over all neighbour pairs with state inheritance ([`detect`]), and the
+//! open-close-iteration update from trial displacements ([`track`]).
+
+use crate::contact::{Contact, ContactSet, PairContacts};
+use crate::cover::CoverDetector;
+use crate::neighbour::NeighbourPair;
+use crate::shape::BlockShape;
+use crate::territory::TerritoryDetector;
+use dda_geom::{DVec2, VertexEdge, displace_point};
+use std::fmt;
+
+/// Tolerances of detection (paper section 2.6).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DetectionParams {
+    /// Contact tolerance d_tol (the paper's d_n^tol), m: radius of an edge's contact region.
+    pub d_tol: f64,
+    /// Entrance angle tolerance theta_e (the paper's theta_e^tol), radians.
+    pub theta_e: f64,
+}
+
+impl DetectionParams {
+    /// Tolerances for a step limited to rotation `theta_max`: theta_e = 2 theta_max
+    /// (paper section 2.6).
+    pub fn new(d_tol: f64, theta_max: f64) -> Self {
+        DetectionParams {
+            d_tol,
+            theta_e: 2.0 * theta_max,
+        }
+    }
+
+    /// sin(theta_e), the bound of the entrance filter (paper eq. 5-6).
+    #[inline]
+    pub fn sin_theta_e(&self) -> f64 {
+        self.theta_e.sin()
+    }
+}
+
+/// A contact detector: finds the candidate contacts of a neighbour pair and their initial
+/// activity at step start, and optionally activates candidates during open-close iteration
+/// from the trial motion. Object-safe, so an engine holds a `Box<dyn ContactDetector>`
+/// chosen at run time, and other crates can add their own.
+pub trait ContactDetector: Send + Sync + fmt::Debug {
+    /// The name a scene's `detector` key uses.
+    fn name(&self) -> &str;
+
+    /// Appends the candidate contacts of the pair of blocks `ids` (shapes `a` = block
+    /// `ids.a`, `b` = block `ids.b`) to `out`, each with its initial activity and with the
+    /// state [`Contact::new`] gives; the driver sorts them and inherits states.
+    fn detect_pair(
+        &self,
+        a: &BlockShape,
+        b: &BlockShape,
+        ids: NeighbourPair,
+        params: &DetectionParams,
+        out: &mut Vec<Contact>,
+    );
+
+    /// Whether [`Self::activates`] should be asked during open-close iteration.
+    fn tracks_trajectories(&self) -> bool {
+        false
+    }
+
+    /// Whether an inactive candidate becomes active, given its measures at step start and
+    /// after the trial displacement.
+    fn activates(&self, _start: VertexEdge, _trial: VertexEdge) -> bool {
+        false
+    }
+}
+
+/// Names of the built-in detectors, as a scene's `detector` key spells them.
+pub const DETECTOR_NAMES: [&str; 3] = ["cover", "type-1", "type-2"];
+
+/// A detector name that is not one of [`DETECTOR_NAMES`].
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct UnknownDetector(pub String);
+
+impl fmt::Display for UnknownDetector {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "unknown detector `{}` (expected one of: {})",
+            self.0,
+            DETECTOR_NAMES.join(", ")
+        )
+    }
+}
+
+impl std::error::Error for UnknownDetector {}
+
+/// The built-in detector called `name`.
+pub fn detector_by_name(name: &str) -> Result<Box<dyn ContactDetector>, UnknownDetector> {
+    match name {
+        "cover" => Ok(Box::new(CoverDetector)),
+        "type-1" => Ok(Box::new(TerritoryDetector::type1())),
+        "type-2" => Ok(Box::new(TerritoryDetector::type2())),
+        other => Err(UnknownDetector(other.to_string())),
+    }
+}
+
+/// Detects the candidates of `pairs` into `list` and `ranges` (offsets into `list`).
+fn detect_range(
+    detector: &dyn ContactDetector,
+    shapes: &[BlockShape],
+    pairs: &[NeighbourPair],
+    params: &DetectionParams,
+    previous: &ContactSet,
+    list: &mut Vec<Contact>,
+    ranges: &mut Vec<PairContacts>,
+) {
+    for &pair in pairs {
+        let start = list.len();
+        detector.detect_pair(
+            &shapes[pair.a as usize],
+            &shapes[pair.b as usize],
+            pair,
+            params,
+            list,
+        );
+        if list.len() == start {
+            continue;
+        }
+        let mine = &mut list[start..];
+        mine.sort_unstable_by_key(|c| c.key);
+        // Inherit the closed state (locked or sliding), the locked point and the cohesion
+        // of the same vertex-edge pair at the end of the previous step (paper 2.3.1).
+        for c in mine.iter_mut() {
+            if let Some(old) = previous.find(&c.key) {
+                c.bonded = old.bonded;
+                if old.active && old.state.is_closed() {
+                    c.state = old.state;
+                    c.locked_r = old.locked_r;
+                    c.slide_dir = old.slide_dir;
+                }
+            }
+        }
+        ranges.push(PairContacts {
+            pair,
+            start: start as u32,
+            end: list.len() as u32,
+        });
+    }
+}
+
+/// Step-start detection: the candidates of every neighbour pair (which must be sorted),
+/// with initial activity from the detector and closed states inherited from `previous`
+/// where the same vertex-edge pair was active and closed. `out` is overwritten. With the
+/// `rayon` feature and `parallel`, pairs are split into chunks detected on the thread
+/// pool and joined in order, so the result is identical to the sequential run.
+pub fn detect(
+    detector: &dyn ContactDetector,
+    shapes: &[BlockShape],
+    pairs: &[NeighbourPair],
+    params: &DetectionParams,
+    previous: &ContactSet,
+    parallel: bool,
+    out: &mut ContactSet,
+) {
+    out.clear();
+    #[cfg(feature = "rayon")]
+    if parallel && pairs.len() >= 256 {
+        use rayon::prelude::*;
+        let chunk = pairs
+            .len()
+            .div_ceil(4 * rayon::current_num_threads().max(1));
+        let parts: Vec<(Vec<Contact>, Vec<PairContacts>)> = pairs
+            .par_chunks(chunk)
+            .map(|ps| {
+                let (mut list, mut ranges) = (Vec::new(), Vec::new());
+                detect_range(
+                    detector,
+                    shapes,
+                    ps,
+                    params,
+                    previous,
+                    &mut list,
+                    &mut ranges,
+                );
+                (list, ranges)
+            })
+            .collect();
+        for (list, ranges) in parts {
+            let base = out.contacts.len() as u32;
+            out.contacts.extend_from_slice(&list);
+            out.pairs.extend(ranges.into_iter().map(|r| PairContacts {
+                pair: r.pair,
+                start: r.start + base,
+                end: r.end + base,
+            }));
+        }
+        return;
+    }
+    let _ = parallel;
+    detect_range(
+        detector,
+        shapes,
+        pairs,
+        params,
+        previous,
+        &mut out.contacts,
+        &mut out.pairs,
+    );
+}
+
+/// Open-close iteration update of activity: every inactive candidate is measured at the
+/// trial positions (blocks moved by `trial[i]` = (u0, v0, r0, ex, ey, gxy) about their
+/// centroids, rotation exact) and activated, closed and locked where its trajectory
+/// crossed the edge, when the detector says so. Returns how many became active.
+pub fn track(
+    detector: &dyn ContactDetector,
+    shapes: &[BlockShape],
+    trial: &[[f64; 6]],
+    set: &mut ContactSet,
+) -> usize {
+    if !detector.tracks_trajectories() {
+        return 0;
+    }
+    let moved = |block: u32, p: DVec2| {
+        let s = &shapes[block as usize];
+        displace_point(p, s.centroid, &trial[block as usize])
+    };
+    let mut changed = 0;
+    for c in set.contacts.iter_mut().filter(|c| !c.active) {
+        let k = c.key;
+        let (vs, es) = (
+            &shapes[k.vertex_block as usize],
+            &shapes[k.edge_block as usize],
+        );
+        let a = vs.vertices[k.vertex as usize];
+        let (b0, b1) = (
+            es.vertices[k.edge as usize],
+            es.vertices[es.next(k.edge as usize)],
+        );
+        let trial_m = VertexEdge::new(
+            moved(k.vertex_block, a),
+            moved(k.edge_block, b0),
+            moved(k.edge_block, b1),
+        );
+        if detector.activates(VertexEdge { d_n: c.d_n, r: c.r }, trial_m) {
+            // Lock where the trajectory crossed the edge's line (0 <= t <= 1).
+            let t = c.d_n / (c.d_n - trial_m.d_n);
+            c.active = true;
+            c.state = crate::contact::ContactState::Locked;
+            c.locked_r = (c.r + t * (trial_m.r - c.r)).clamp(0.0, 1.0);
+            changed += 1;
+        }
+    }
+    changed
+}
