@@ -230,13 +230,8 @@ mod tests {
     use super::*;
     use crate::contact::ContactSet;
     use crate::detector::track;
-    use dda_geom::ConvexPolygon;
 
-    fn shape(c: &[[f64; 2]]) -> BlockShape {
-        BlockShape::new(&ConvexPolygon::from_coords(c).expect("valid test polygon"))
-    }
-
-    const IDS: NeighbourPair = NeighbourPair { a: 0, b: 1 };
+    use crate::test_util::{IDS, shape};
 
     fn params() -> DetectionParams {
         DetectionParams::new(0.1, 2f64.to_radians())

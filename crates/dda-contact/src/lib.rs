@@ -18,6 +18,9 @@ mod shape;
 mod territory;
 pub mod tracking;
 
+#[cfg(test)]
+mod test_util;
+
 pub use self::contact::{Contact, ContactKey, ContactSet, ContactState, PairContacts};
 pub use self::cover::CoverDetector;
 pub use self::detector::{

@@ -216,13 +216,8 @@ impl ContactDetector for TerritoryDetector {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use dda_geom::ConvexPolygon;
 
-    fn shape(c: &[[f64; 2]]) -> BlockShape {
-        BlockShape::new(&ConvexPolygon::from_coords(c).expect("valid test polygon"))
-    }
-
-    const IDS: NeighbourPair = NeighbourPair { a: 0, b: 1 };
+    use crate::test_util::{IDS, shape};
 
     fn run(
         det: TerritoryDetector,
