@@ -231,7 +231,7 @@ mod tests {
     use crate::contact::ContactSet;
     use crate::detector::track;
 
-    use crate::test_util::{IDS, shape};
+    use crate::test_util::{IDS, shape, tuple};
 
     fn params() -> DetectionParams {
         DetectionParams::new(0.1, 2f64.to_radians())
@@ -240,14 +240,7 @@ mod tests {
     fn keys(cs: &[Contact], active: bool) -> Vec<(u32, u32, u32, u32)> {
         cs.iter()
             .filter(|c| c.active == active)
-            .map(|c| {
-                (
-                    c.key.vertex_block,
-                    c.key.vertex,
-                    c.key.edge_block,
-                    c.key.edge,
-                )
-            })
+            .map(|c| tuple(c.key))
             .collect()
     }
 
@@ -323,17 +316,7 @@ mod tests {
         let trial = [[0.12, -0.08, 0.0, 0.0, 0.0, 0.0], [0.0; 6]];
         let mut moved = set.clone();
         assert_eq!(track(&CoverDetector, &shapes, &trial, &mut moved), 2);
-        let act: Vec<_> = moved
-            .active()
-            .map(|c| {
-                (
-                    c.key.vertex_block,
-                    c.key.vertex,
-                    c.key.edge_block,
-                    c.key.edge,
-                )
-            })
-            .collect();
+        let act: Vec<_> = moved.active().map(|c| tuple(c.key)).collect();
         assert_eq!(act, vec![(0, 1, 1, 2), (1, 3, 0, 0)]);
         assert!(
             moved

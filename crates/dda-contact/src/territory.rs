@@ -217,7 +217,7 @@ impl ContactDetector for TerritoryDetector {
 mod tests {
     use super::*;
 
-    use crate::test_util::{IDS, shape};
+    use crate::test_util::{IDS, shape, tuple};
 
     fn run(
         det: TerritoryDetector,
@@ -234,16 +234,7 @@ mod tests {
             &mut out,
         );
         assert!(out.iter().all(|c| c.active));
-        out.iter()
-            .map(|c| {
-                (
-                    c.key.vertex_block,
-                    c.key.vertex,
-                    c.key.edge_block,
-                    c.key.edge,
-                )
-            })
-            .collect()
+        out.iter().map(|c| tuple(c.key)).collect()
     }
 
     #[test]
