@@ -5,6 +5,14 @@
 //! This facade re-exports the layers; each can also be used alone:
 //! - [`geom`]: convex polygons, entrance blocks, cutting by joint sets.
 //! - [`contact`]: neighbour search, the contact detectors (cover, type-1, type-2).
+//! - [`core`]: scenes, effects, the implicit DDA engine.
+//! - [`bench`]: scene generators and the built-in scenes.
+//!
+//! It also holds what the `dda` command writes ([`report`]).
 
+pub mod report;
+
+pub use dda_bench as bench;
 pub use dda_contact as contact;
+pub use dda_core as core;
 pub use dda_geom as geom;

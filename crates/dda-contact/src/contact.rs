@@ -71,6 +71,9 @@ pub struct Contact {
     pub slide_dir: f64,
     /// Whether cohesion and tensile strength still hold (lost for good once broken).
     pub bonded: bool,
+    /// Compressive normal force of the last solve, N (positive pushing the blocks apart),
+    /// kept by the engine for the friction of a sliding contact.
+    pub normal_force: f64,
 }
 
 impl Contact {
@@ -90,6 +93,7 @@ impl Contact {
             locked_r: r,
             slide_dir: 0.0,
             bonded: false,
+            normal_force: 0.0,
         }
     }
 }

@@ -131,6 +131,7 @@ fn detect_range(
                     c.state = old.state;
                     c.locked_r = old.locked_r;
                     c.slide_dir = old.slide_dir;
+                    c.normal_force = old.normal_force;
                 }
             }
         }

@@ -1,0 +1,125 @@
+//! Jointed rock columns (paper section 5): a rectangle cut by joint sets, standing on a
+//! fixed base, under gravity.
+
+use dda_core::Scene;
+use dda_core::scene::{Analysis, BlockSpec, Joint, Material, Mode, Plane};
+use dda_geom::{
+    ConvexPolygon, DVec2, JointSet, JointSetError, PolygonError, cut_by_joint_sets, shapes,
+};
+use std::collections::BTreeMap;
+
+/// A column to cut: its size, the joint sets, and the sliver threshold.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ColumnSpec {
+    /// Width, m.
+    pub width: f64,
+    /// Height, m.
+    pub height: f64,
+    /// Joint sets cutting it.
+    pub sets: Vec<JointSet>,
+    /// Pieces smaller than this area (m^2) are dropped as slivers.
+    pub min_area: f64,
+}
+
+/// Why a column could not be cut.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ColumnError {
+    /// The column's rectangle is invalid (size not finite and positive).
+    Region(PolygonError),
+    /// A joint set is invalid.
+    Cut(JointSetError),
+}
+
+impl std::fmt::Display for ColumnError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ColumnError::Region(e) => write!(f, "column rectangle: {e}"),
+            ColumnError::Cut(e) => write!(f, "joint sets: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for ColumnError {}
+
+/// The blocks of a column with its lower-left corner at the origin.
+pub fn jointed_column(spec: &ColumnSpec) -> Result<Vec<ConvexPolygon>, ColumnError> {
+    let region = shapes::rectangle(DVec2::ZERO, DVec2::new(spec.width, spec.height))
+        .map_err(ColumnError::Region)?;
+    let cut = cut_by_joint_sets(&region, &spec.sets, spec.min_area).map_err(ColumnError::Cut)?;
+    Ok(cut.blocks)
+}
+
+/// A scene of `blocks` standing on a fixed, frictionless base 1 m thick that extends a
+/// column height to each side, under gravity 9.8 m/s^2, with the rock of paper section 5
+/// (density 2600 kg/m^3, E = 1 GPa, nu = 0.3) and frictionless joints.
+pub fn column_scene(name: &str, blocks: &[ConvexPolygon], analysis: Analysis) -> Scene {
+    let bb = blocks
+        .iter()
+        .map(|b| b.aabb())
+        .reduce(|a, b| a.union(&b))
+        .unwrap_or(dda_geom::Aabb {
+            min: DVec2::ZERO,
+            max: DVec2::ONE,
+        });
+    let reach = bb.size().y.max(bb.size().x);
+    let (x0, x1, y) = (bb.min.x - reach, bb.max.x + reach, bb.min.y);
+    let spec = |id: String, vertices: Vec<[f64; 2]>, fixed: bool| BlockSpec {
+        id,
+        material: "rock".into(),
+        vertices,
+        fixed,
+        velocity: None,
+        angular_velocity: None,
+        stress: None,
+        loads: Vec::new(),
+        fixed_points: Vec::new(),
+    };
+    let mut specs = vec![spec(
+        "base".into(),
+        vec![[x0, y - 1.0], [x1, y - 1.0], [x1, y], [x0, y]],
+        true,
+    )];
+    for (i, b) in blocks.iter().enumerate() {
+        specs.push(spec(
+            format!("b{i}"),
+            b.vertices().iter().map(|v| [v.x, v.y]).collect(),
+            false,
+        ));
+    }
+    Scene {
+        name: name.into(),
+        analysis,
+        materials: BTreeMap::from([(
+            "rock".into(),
+            Material {
+                density: 2600.0,
+                young: Some(1e9),
+                poisson: Some(0.3),
+            },
+        )]),
+        joints: BTreeMap::from([("default".into(), Joint::default())]),
+        blocks: specs,
+    }
+}
+
+/// Analysis settings of a column run: dynamic, 1 s, gravity 9.8 m/s^2, theta_max 2 deg,
+/// d_tol = 2 d_max (paper section 2.6).
+pub fn column_analysis(time_step: f64, d_max: f64, penalty: f64) -> Analysis {
+    Analysis {
+        mode: Mode::Dynamic,
+        duration: 1.0,
+        time_step,
+        max_displacement: d_max,
+        max_rotation_deg: 2.0,
+        contact_tolerance: Some(2.0 * d_max),
+        normal_penalty: penalty,
+        shear_penalty: None,
+        fixed_penalty: None,
+        detector: "cover".into(),
+        gravity: Some([0.0, -9.8]),
+        deformable: true,
+        plane: Plane::Stress,
+        max_oci: 6,
+        frames: 10,
+    }
+}

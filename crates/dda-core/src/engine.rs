@@ -1,0 +1,890 @@
+//! The time-stepping engine: one step is
+//! blocks -> neighbour pairs -> contacts -> system -> solve -> open-close iteration ->
+//! update (DESIGN 3).
+//!
+//! - Detection runs once per step at its start; the candidate pairs fix the pattern of the
+//!   global matrix for the whole step (and its retries).
+//! - The open-close iteration (OCI) assembles the springs of the active closed contacts,
+//!   solves, and re-checks every contact: open/closed by the sign of the normal distance
+//!   (or the tensile strength of a bonded contact), locked/sliding by Mohr-Coulomb; with
+//!   the cover detector, inactive covers the trial motion enters through become active
+//!   (paper eq. 12-13). It ends when nothing changes.
+//! - Time-step control: if OCI has not converged in `max_oci` iterations the step is
+//!   redone with dt / 3; if the largest vertex displacement exceeds d_max or the largest
+//!   rotation exceeds theta_max, with dt scaled down in proportion. After an easy step
+//!   (OCI in at most half the bound, displacement under half of d_max) dt grows by 1.25,
+//!   never past the initial step. The last step is shortened to land on `duration`.
+//!   These factors are our choice: DESIGN 3 and the paper fix only the criteria.
+//! - Update: vertices move by T D with the rotation applied exactly; stresses accumulate
+//!   C (ex, ey, gxy); velocities V <- 2 D / dt - V (dynamic) or 0 (static).
+
+use crate::effects::Effects;
+use crate::kinematics::{Mat6, Vec6, along, elasticity, mass_matrix, point_displacement};
+use crate::scene::{JointProps, Mode, Model};
+use crate::springs::{Row, contact_length, contact_points, normal_row, shear_row};
+use crate::system::{BlockSystem, Entry, SolveError};
+use dda_contact::{
+    BlockShape, ContactDetector, ContactSet, ContactState, DetectionParams, NeighbourPair,
+    detector_by_name, neighbour_pairs,
+};
+use dda_geom::{Aabb, ConvexPolygon, DVec2, VertexEdge, displace_point};
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// Why a simulation cannot go on; the state stays at the last completed step.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SimError {
+    /// The time step shrank below its floor without a step converging.
+    #[error("time step collapsed to {dt:.3e} s at t = {t:.6} s: {reason} (last good state kept)")]
+    TimeStepCollapsed {
+        /// Simulated time of the last good state.
+        t: f64,
+        /// The step size that failed.
+        dt: f64,
+        /// What kept failing.
+        reason: String,
+    },
+    /// The global system could not be solved.
+    #[error("at t = {t:.6} s: {source} (last good state kept)")]
+    Solve {
+        /// Simulated time of the last good state.
+        t: f64,
+        /// The solver's error.
+        source: SolveError,
+    },
+    /// A block would be turned inside out by the step.
+    #[error("at t = {t:.6} s: block `{block}` would be inverted (last good state kept)")]
+    Inverted {
+        /// Simulated time of the last good state.
+        t: f64,
+        /// Block id.
+        block: String,
+    },
+}
+
+/// What one completed step did (a row of history.csv).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct StepRecord {
+    /// Step number, from 1.
+    pub step: u64,
+    /// Simulated time at the end of the step, s.
+    pub t: f64,
+    /// Step size used, s.
+    pub dt: f64,
+    /// OCI iterations of the accepted attempt.
+    pub oci: u32,
+    /// Attempts thrown away (dt cuts) before this step was accepted.
+    pub cuts: u32,
+    /// Candidate contacts.
+    pub candidates: usize,
+    /// Active contacts at the end of the step.
+    pub active_contacts: usize,
+    /// Active closed contacts at the end of the step.
+    pub closed_contacts: usize,
+    /// Largest penetration of a closed contact after the step, m.
+    pub max_penetration: f64,
+    /// Kinetic energy after the step, J (per unit thickness).
+    pub kinetic_energy: f64,
+    /// Wall seconds in contact detection (step start and trajectory tracking).
+    pub detection_s: f64,
+    /// Wall seconds assembling the system.
+    pub assembly_s: f64,
+    /// Wall seconds factorising and solving.
+    pub solve_s: f64,
+}
+
+/// Cumulative counters of a run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Totals {
+    /// Completed steps.
+    pub steps: u64,
+    /// OCI iterations, including those of discarded attempts.
+    pub oci_iterations: u64,
+    /// Discarded attempts (dt cuts).
+    pub cuts: u64,
+    /// Shear springs assembled (summed over OCI iterations).
+    pub shear_springs: u64,
+    /// Normal springs assembled (summed over OCI iterations).
+    pub normal_springs: u64,
+    /// Friction forces applied (summed over OCI iterations).
+    pub friction_forces: u64,
+    /// Largest penetration seen after any step, m.
+    pub max_penetration: f64,
+    /// Wall seconds stepping.
+    pub total_s: f64,
+    /// Wall seconds in contact detection.
+    pub detection_s: f64,
+    /// Wall seconds in assembly.
+    pub assembly_s: f64,
+    /// Wall seconds in factorisation and solve.
+    pub solve_s: f64,
+}
+
+/// A block's state.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BlockState {
+    /// Current polygon.
+    pub polygon: ConvexPolygon,
+    /// Velocity (rates of u0, v0, r0, ex, ey, gxy).
+    pub velocity: Vec6,
+    /// Stress (sx, sy, txy), Pa.
+    pub stress: [f64; 3],
+    /// Accumulated rotation, rad.
+    pub rotation: f64,
+    /// Point loads: current point, force.
+    pub loads: Vec<(DVec2, DVec2)>,
+    /// Fixed points: current material point, its fixed place.
+    pub fixed_points: Vec<(DVec2, DVec2)>,
+}
+
+/// Options of a run that are not part of the scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RunOptions {
+    /// Detect contacts on the thread pool (results are identical either way).
+    pub parallel: bool,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        RunOptions { parallel: true }
+    }
+}
+
+/// Floor of the time step, relative to the initial step: below it the run stops.
+const DT_FLOOR: f64 = 1e-9;
+
+/// A running simulation of a validated scene.
+pub struct Simulation {
+    model: Model,
+    effects: Effects,
+    detector: Box<dyn ContactDetector>,
+    detection: DetectionParams,
+    options: RunOptions,
+    nd: usize,
+    blocks: Vec<BlockState>,
+    shapes: Vec<BlockShape>,
+    /// Free-block index of each block (None: fixed).
+    free: Vec<Option<u32>>,
+    n_free: usize,
+    t: f64,
+    dt: f64,
+    totals: Totals,
+    contacts: ContactSet,
+    // Work buffers, reused from step to step.
+    system: BlockSystem,
+    prev: ContactSet,
+    pairs: Vec<NeighbourPair>,
+    aabbs: Vec<Aabb>,
+    block_pairs: Vec<(u32, u32)>,
+    pair_entry: Vec<Option<Entry>>,
+    rows: Vec<Row>,
+    base_k: Vec<Mat6>,
+    base_f: Vec<Vec6>,
+    mass: Vec<Mat6>,
+    d: Vec<Vec6>,
+}
+
+impl std::fmt::Debug for Simulation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Simulation")
+            .field("scene", &self.model.name)
+            .field("t", &self.t)
+            .field("dt", &self.dt)
+            .field("blocks", &self.blocks.len())
+            .finish()
+    }
+}
+
+impl Simulation {
+    /// Sets up a run of `model` at t = 0.
+    pub fn new(model: Model, options: RunOptions) -> Self {
+        let effects = Effects::of(&model);
+        let p = &model.params;
+        // Validation accepted the name, so this only falls back on a programming error.
+        let detector =
+            detector_by_name(&p.detector).unwrap_or_else(|_| Box::new(dda_contact::CoverDetector));
+        let detection = DetectionParams::new(p.d_tol, p.theta_max);
+        let mut free = Vec::with_capacity(model.blocks.len());
+        let mut n_free = 0u32;
+        for b in &model.blocks {
+            if b.fixed {
+                free.push(None);
+            } else {
+                free.push(Some(n_free));
+                n_free += 1;
+            }
+        }
+        let blocks: Vec<BlockState> = model
+            .blocks
+            .iter()
+            .map(|b| BlockState {
+                polygon: b.polygon.clone(),
+                velocity: if b.fixed { [0.0; 6] } else { b.velocity },
+                stress: if effects.elasticity {
+                    b.stress
+                } else {
+                    [0.0; 3]
+                },
+                rotation: 0.0,
+                loads: b.loads.clone(),
+                fixed_points: b.fixed_points.iter().map(|&q| (q, q)).collect(),
+            })
+            .collect();
+        let shapes = blocks.iter().map(|b| BlockShape::new(&b.polygon)).collect();
+        let n = blocks.len();
+        Simulation {
+            dt: p.dt0,
+            nd: effects.dofs_per_block(),
+            model,
+            effects,
+            detector,
+            detection,
+            options,
+            blocks,
+            shapes,
+            free,
+            n_free: n_free as usize,
+            t: 0.0,
+            totals: Totals::default(),
+            contacts: ContactSet::default(),
+            system: BlockSystem::new(),
+            prev: ContactSet::default(),
+            pairs: Vec::new(),
+            aabbs: Vec::with_capacity(n),
+            block_pairs: Vec::new(),
+            pair_entry: Vec::new(),
+            rows: Vec::new(),
+            base_k: Vec::new(),
+            base_f: Vec::new(),
+            mass: Vec::new(),
+            d: vec![[0.0; 6]; n],
+        }
+    }
+
+    /// The validated scene.
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    /// The effects this run assembles.
+    pub fn effects(&self) -> &Effects {
+        &self.effects
+    }
+
+    /// The detector's name.
+    pub fn detector_name(&self) -> &str {
+        self.detector.name()
+    }
+
+    /// Simulated time, s.
+    pub fn time(&self) -> f64 {
+        self.t
+    }
+
+    /// The current (controlled) step size, s.
+    pub fn time_step(&self) -> f64 {
+        self.dt
+    }
+
+    /// Whether the run has reached its duration.
+    pub fn finished(&self) -> bool {
+        self.t >= self.model.params.duration
+    }
+
+    /// The blocks' states.
+    pub fn blocks(&self) -> &[BlockState] {
+        &self.blocks
+    }
+
+    /// The contacts at the end of the last step.
+    pub fn contacts(&self) -> &ContactSet {
+        &self.contacts
+    }
+
+    /// Counters so far.
+    pub fn totals(&self) -> &Totals {
+        &self.totals
+    }
+
+    /// Unknowns of the global system.
+    pub fn unknowns(&self) -> usize {
+        self.n_free * self.nd
+    }
+
+    /// Number of symbolic and numeric factorisations so far.
+    pub fn factorisations(&self) -> (u64, u64) {
+        (self.system.symbolic_count, self.system.numeric_count)
+    }
+
+    /// Runs to the scene's duration, calling `on_step` after every step.
+    pub fn run(
+        &mut self,
+        mut on_step: impl FnMut(&Simulation, &StepRecord),
+    ) -> Result<(), SimError> {
+        while !self.finished() {
+            let rec = self.step()?;
+            on_step(self, &rec);
+        }
+        Ok(())
+    }
+
+    /// Advances one step (with as many retries as the time-step control needs).
+    pub fn step(&mut self) -> Result<StepRecord, SimError> {
+        let started = Instant::now();
+        let mut rec = StepRecord::default();
+        let t_det = Instant::now();
+        self.detect_step_start();
+        rec.detection_s += t_det.elapsed().as_secs_f64();
+        rec.candidates = self.contacts.len();
+
+        let t_pat = Instant::now();
+        self.set_pattern()?;
+        rec.assembly_s += t_pat.elapsed().as_secs_f64();
+        // Normal rows depend only on step-start geometry: compute once per step.
+        self.rows.clear();
+        for c in &self.contacts.contacts {
+            self.rows.push(normal_row(c, &self.shapes));
+        }
+        let saved = self.contacts.contacts.clone();
+        let p = self.model.params.clone();
+        let remaining = p.duration - self.t;
+        // Land on `duration`; a remainder within 1e-6 of a step is taken with it rather
+        // than left as a sliver step.
+        let landing = self.dt * (1.0 + 1e-6) >= remaining;
+        let mut dt = if landing { remaining } else { self.dt };
+
+        loop {
+            let t_asm = Instant::now();
+            self.base_terms(dt);
+            rec.assembly_s += t_asm.elapsed().as_secs_f64();
+            let (converged, iterations) = self.open_close_iteration(&mut rec)?;
+            self.totals.oci_iterations += iterations as u64;
+            let reason;
+            if converged {
+                let (disp, rot) = self.largest_motion();
+                if disp <= p.d_max && rot <= p.theta_max {
+                    rec.oci = iterations;
+                    let easy = iterations <= p.max_oci.div_ceil(2) && disp <= 0.5 * p.d_max;
+                    self.accept(dt, &mut rec)?;
+                    if landing {
+                        self.t = p.duration;
+                    } else {
+                        self.dt = dt;
+                        if easy {
+                            self.dt = (dt * 1.25).min(p.dt0);
+                        }
+                    }
+                    break;
+                }
+                let ratio = (p.d_max / disp).min(p.theta_max / rot.max(f64::MIN_POSITIVE));
+                dt *= (0.9 * ratio).clamp(0.1, 0.9);
+                reason = "step displacement above d_max or rotation above theta_max";
+            } else {
+                dt /= 3.0;
+                reason = "open-close iteration did not converge";
+            }
+            rec.cuts += 1;
+            self.totals.cuts += 1;
+            self.contacts.contacts.copy_from_slice(&saved);
+            if dt < DT_FLOOR * p.dt0 {
+                return Err(SimError::TimeStepCollapsed {
+                    t: self.t,
+                    dt,
+                    reason: reason.to_string(),
+                });
+            }
+        }
+        self.totals.steps += 1;
+        rec.step = self.totals.steps;
+        rec.t = self.t;
+        rec.active_contacts = self.contacts.active().count();
+        rec.closed_contacts = self.contacts.closed_count();
+        rec.kinetic_energy = self.kinetic_energy();
+        self.totals.max_penetration = self.totals.max_penetration.max(rec.max_penetration);
+        self.totals.detection_s += rec.detection_s;
+        self.totals.assembly_s += rec.assembly_s;
+        self.totals.solve_s += rec.solve_s;
+        self.totals.total_s += started.elapsed().as_secs_f64();
+        Ok(rec)
+    }
+
+    /// Step-start detection with states inherited from the previous step, then the
+    /// engine's normalisation: closed contacts of frictionless joints slide (no shear
+    /// spring), and at t = 0 closed contacts of bonding joints start bonded.
+    fn detect_step_start(&mut self) {
+        self.aabbs.clear();
+        self.aabbs.extend(self.shapes.iter().map(|s| s.aabb));
+        neighbour_pairs(&self.aabbs, self.detection.d_tol, &mut self.pairs);
+        let free = &self.free;
+        self.pairs
+            .retain(|p| free[p.a as usize].is_some() || free[p.b as usize].is_some());
+        std::mem::swap(&mut self.prev, &mut self.contacts);
+        dda_contact::detect(
+            self.detector.as_ref(),
+            &self.shapes,
+            &self.pairs,
+            &self.detection,
+            &self.prev,
+            self.options.parallel,
+            &mut self.contacts,
+        );
+        let first = self.totals.steps == 0;
+        for c in self.contacts.contacts.iter_mut() {
+            let j = self
+                .model
+                .joint_between(c.key.vertex_block as usize, c.key.edge_block as usize);
+            if c.state.is_closed() && !j.has_shear() {
+                c.state = ContactState::Sliding;
+            }
+            if first && c.active && c.state.is_closed() && j.bonds() {
+                c.bonded = true;
+            }
+        }
+    }
+
+    /// Fixes the pattern of the global matrix from the candidate pairs between free
+    /// blocks, reusing the symbolic factorisation when the pattern is unchanged.
+    fn set_pattern(&mut self) -> Result<(), SimError> {
+        self.block_pairs.clear();
+        for pc in &self.contacts.pairs {
+            if let (Some(a), Some(b)) =
+                (self.free[pc.pair.a as usize], self.free[pc.pair.b as usize])
+            {
+                self.block_pairs.push((a.min(b), a.max(b)));
+            }
+        }
+        self.block_pairs.sort_unstable();
+        self.block_pairs.dedup();
+        self.system
+            .set_pattern(self.n_free, self.nd, &self.block_pairs)
+            .map_err(|source| SimError::Solve { t: self.t, source })?;
+        self.pair_entry.clear();
+        for pc in &self.contacts.pairs {
+            let e = match (self.free[pc.pair.a as usize], self.free[pc.pair.b as usize]) {
+                (Some(a), Some(b)) => self.system.entry(a, b),
+                _ => None,
+            };
+            self.pair_entry.push(e);
+        }
+        Ok(())
+    }
+
+    /// Per-block terms that do not depend on contacts: elasticity and stress, inertia,
+    /// gravity, point loads, fixed points (each only if its effect is on).
+    fn base_terms(&mut self, dt: f64) {
+        let nb = self.blocks.len();
+        let eff = self.effects;
+        let p = &self.model.params;
+        self.base_k.clear();
+        self.base_f.clear();
+        self.mass.clear();
+        for i in 0..nb {
+            if self.free[i].is_none() {
+                continue;
+            }
+            let b = &self.blocks[i];
+            let m = b.polygon.moments();
+            let mat = self.model.materials[self.model.blocks[i].material];
+            let mass = mass_matrix(&m, mat.density);
+            let mut k = [[0.0; 6]; 6];
+            let mut f = [0.0; 6];
+            // Inertia (constant acceleration): 2/dt^2 M, and 2/dt M V when dynamic.
+            let c2 = 2.0 / (dt * dt);
+            for a in 0..6 {
+                for bb in 0..6 {
+                    k[a][bb] += c2 * mass[a][bb];
+                }
+            }
+            if eff.inertia {
+                let c1 = 2.0 / dt;
+                for a in 0..6 {
+                    f[a] += c1 * (0..6).map(|bb| mass[a][bb] * b.velocity[bb]).sum::<f64>();
+                }
+            }
+            if eff.elasticity {
+                let e = elasticity(mat.young, mat.poisson);
+                for a in 0..3 {
+                    for bb in 0..3 {
+                        k[3 + a][3 + bb] += m.area * e[a][bb];
+                    }
+                    f[3 + a] -= m.area * b.stress[a];
+                }
+            }
+            if eff.gravity
+                && let Some(g) = p.gravity
+            {
+                f[0] += mat.density * g.x * m.area;
+                f[1] += mat.density * g.y * m.area;
+            }
+            for &(at, force) in &b.loads {
+                let r = along(force, at, m.centroid);
+                for a in 0..6 {
+                    f[a] += r[a];
+                }
+            }
+            for &(now, place) in &b.fixed_points {
+                // Two rows (x and y) of a spring pulling the point to its place.
+                for dir in [DVec2::X, DVec2::Y] {
+                    let r = along(dir, now, m.centroid);
+                    let g0 = (now - place).dot(dir);
+                    for a in 0..6 {
+                        f[a] -= p.fixed_penalty * g0 * r[a];
+                        for bb in 0..6 {
+                            k[a][bb] += p.fixed_penalty * r[a] * r[bb];
+                        }
+                    }
+                }
+            }
+            self.base_k.push(k);
+            self.base_f.push(f);
+            self.mass.push(mass);
+        }
+    }
+
+    /// The joint of a contact.
+    fn joint(&self, k: usize) -> JointProps {
+        let key = self.contacts.contacts[k].key;
+        *self
+            .model
+            .joint_between(key.vertex_block as usize, key.edge_block as usize)
+    }
+
+    /// Assembles K and F for the current contact states.
+    fn assemble(&mut self) {
+        self.system.clear();
+        for (f, (k, rhs)) in self.base_k.iter().zip(&self.base_f).enumerate() {
+            self.system.add_diagonal(f as u32, k);
+            self.system.add_rhs(f as u32, 1.0, rhs);
+        }
+        let p = &self.model.params;
+        let (pn, ps) = (p.normal_penalty, p.shear_penalty);
+        for (pk, pc) in self.contacts.pairs.iter().enumerate() {
+            let entry = self.pair_entry[pk];
+            for k in pc.start as usize..pc.end as usize {
+                let c = self.contacts.contacts[k];
+                if !(c.active && c.state.is_closed()) {
+                    continue;
+                }
+                add_spring(&mut self.system, &self.free, entry, pn, &self.rows[k]);
+                self.totals.normal_springs += 1;
+                let j = self.joint(k);
+                if !j.has_shear() {
+                    continue;
+                }
+                match c.state {
+                    ContactState::Locked => {
+                        let row = shear_row(&c, &self.shapes, c.locked_r);
+                        add_spring(&mut self.system, &self.free, entry, ps, &row);
+                        self.totals.shear_springs += 1;
+                    }
+                    ContactState::Sliding if c.slide_dir != 0.0 => {
+                        let mut limit = c.normal_force.max(0.0) * j.tan_phi;
+                        if c.bonded {
+                            limit += j.cohesion * contact_length(&c, &self.shapes);
+                        }
+                        let row = shear_row(&c, &self.shapes, c.r.clamp(0.0, 1.0));
+                        add_force(&mut self.system, &self.free, -c.slide_dir * limit, &row);
+                        self.totals.friction_forces += 1;
+                    }
+                    _ => {}
+                }
+            }
+        }
+    }
+
+    /// Open-close iteration at step size `dt` (base terms already built). Returns whether
+    /// it converged and how many iterations it took.
+    fn open_close_iteration(&mut self, rec: &mut StepRecord) -> Result<(bool, u32), SimError> {
+        let max_oci = self.model.params.max_oci;
+        for it in 1..=max_oci {
+            let t0 = Instant::now();
+            self.assemble();
+            let t1 = Instant::now();
+            rec.assembly_s += (t1 - t0).as_secs_f64();
+            self.system
+                .solve()
+                .map_err(|source| SimError::Solve { t: self.t, source })?;
+            self.gather_solution();
+            let t2 = Instant::now();
+            rec.solve_s += (t2 - t1).as_secs_f64();
+            let mut changed = self.update_states();
+            rec.assembly_s += t2.elapsed().as_secs_f64();
+            let t3 = Instant::now();
+            let activated = dda_contact::track(
+                self.detector.as_ref(),
+                &self.shapes,
+                &self.d,
+                &mut self.contacts,
+            );
+            if activated > 0 {
+                self.normalise_new_contacts();
+            }
+            changed += activated;
+            rec.detection_s += t3.elapsed().as_secs_f64();
+            if changed == 0 {
+                return Ok((true, it));
+            }
+        }
+        Ok((false, max_oci))
+    }
+
+    /// Contacts just activated by trajectory tracking come back locked; frictionless
+    /// joints make them slide instead.
+    fn normalise_new_contacts(&mut self) {
+        for k in 0..self.contacts.contacts.len() {
+            let c = self.contacts.contacts[k];
+            if c.state == ContactState::Locked && !self.joint(k).has_shear() {
+                self.contacts.contacts[k].state = ContactState::Sliding;
+            }
+        }
+    }
+
+    /// Copies the solution into per-block motions (zero for fixed blocks).
+    fn gather_solution(&mut self) {
+        let nd = self.nd;
+        for (i, f) in self.free.iter().enumerate() {
+            self.d[i] = [0.0; 6];
+            if let Some(f) = f {
+                self.d[i][..nd].copy_from_slice(self.system.solution(*f));
+            }
+        }
+    }
+
+    /// Re-checks every active contact against the trial solution; returns how many
+    /// changed state.
+    fn update_states(&mut self) -> usize {
+        let p = &self.model.params;
+        let (pn, ps) = (p.normal_penalty, p.shear_penalty);
+        // A closed contact opens only beyond a band of 1e-9 d_tol: blocks that touch to
+        // rounding (joint faces cut from one rock) otherwise chatter between open and
+        // closed on d of order 1e-17 m and never converge. The tension held inside the
+        // band, p * 1e-9 d_tol, is negligible (our choice; the paper is silent).
+        let open_band = 1e-9 * p.d_tol;
+        let mut changed = 0;
+        for k in 0..self.contacts.contacts.len() {
+            let c = self.contacts.contacts[k];
+            if !c.active {
+                continue;
+            }
+            let j = *self
+                .model
+                .joint_between(c.key.vertex_block as usize, c.key.edge_block as usize);
+            let d = self.rows[k].eval(&self.d);
+            let mut n = c;
+            match c.state {
+                ContactState::Open => {
+                    if d < 0.0 {
+                        // Closes where its trajectory crossed the edge's line.
+                        let r1 = self.trial_ratio(&c);
+                        let t = if c.d_n > 0.0 {
+                            c.d_n / (c.d_n - d)
+                        } else {
+                            0.0
+                        };
+                        n.locked_r = (c.r + t * (r1 - c.r)).clamp(0.0, 1.0);
+                        n.state = if j.has_shear() {
+                            ContactState::Locked
+                        } else {
+                            ContactState::Sliding
+                        };
+                        n.slide_dir = 0.0;
+                        n.normal_force = -pn * d;
+                    }
+                }
+                ContactState::Locked | ContactState::Sliding => {
+                    let length = contact_length(&c, &self.shapes);
+                    let holds_tension = c.bonded
+                        && j.tensile_strength > 0.0
+                        && pn * d <= j.tensile_strength * length;
+                    if d > open_band && !holds_tension {
+                        n.state = ContactState::Open;
+                        n.bonded = false;
+                        n.normal_force = 0.0;
+                    } else {
+                        n.normal_force = -pn * d;
+                        if j.has_shear() {
+                            if c.state == ContactState::Locked {
+                                let s = shear_row(&c, &self.shapes, c.locked_r).eval(&self.d);
+                                let mut limit = n.normal_force.max(0.0) * j.tan_phi;
+                                if c.bonded {
+                                    limit += j.cohesion * length;
+                                }
+                                if ps * s.abs() > limit {
+                                    n.state = ContactState::Sliding;
+                                    n.slide_dir = s.signum();
+                                    n.bonded = false;
+                                }
+                            } else {
+                                let s =
+                                    shear_row(&c, &self.shapes, c.r.clamp(0.0, 1.0)).eval(&self.d);
+                                if c.slide_dir == 0.0 {
+                                    n.slide_dir = s.signum();
+                                } else if s * c.slide_dir < 0.0 {
+                                    // The motion reversed against friction: it sticks.
+                                    n.state = ContactState::Locked;
+                                    n.locked_r = c.r.clamp(0.0, 1.0);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            if n.state != c.state || n.slide_dir != c.slide_dir {
+                changed += 1;
+            }
+            self.contacts.contacts[k] = n;
+        }
+        changed
+    }
+
+    /// Projection ratio of a contact's vertex on its edge at the trial positions.
+    fn trial_ratio(&self, c: &dda_contact::Contact) -> f64 {
+        let (p1, p2, p3) = contact_points(c, &self.shapes);
+        let k = c.key;
+        let (ci, cj) = (
+            self.shapes[k.vertex_block as usize].centroid,
+            self.shapes[k.edge_block as usize].centroid,
+        );
+        let dv = &self.d[k.vertex_block as usize];
+        let de = &self.d[k.edge_block as usize];
+        VertexEdge::new(
+            displace_point(p1, ci, dv),
+            displace_point(p2, cj, de),
+            displace_point(p3, cj, de),
+        )
+        .r
+    }
+
+    /// Largest vertex displacement (first order) and largest |rotation| of the trial
+    /// solution.
+    fn largest_motion(&self) -> (f64, f64) {
+        let (mut disp, mut rot) = (0.0f64, 0.0f64);
+        for (i, s) in self.shapes.iter().enumerate() {
+            if self.free[i].is_none() {
+                continue;
+            }
+            let d = &self.d[i];
+            rot = rot.max(d[2].abs());
+            for &v in &s.vertices {
+                disp = disp.max(point_displacement(v, s.centroid, d).length());
+            }
+        }
+        (disp, rot)
+    }
+
+    /// Commits the trial solution: moves blocks, updates stresses and velocities, and
+    /// records penetration.
+    fn accept(&mut self, dt: f64, rec: &mut StepRecord) -> Result<(), SimError> {
+        let mut max_pen = 0.0f64;
+        for (k, c) in self.contacts.contacts.iter().enumerate() {
+            if c.active && c.state.is_closed() {
+                max_pen = max_pen.max(-self.rows[k].eval(&self.d));
+            }
+        }
+        rec.max_penetration = max_pen;
+        rec.dt = dt;
+        // Move every block first, so that a failure leaves the state untouched.
+        let mut moved = Vec::with_capacity(self.n_free);
+        for (i, b) in self.blocks.iter().enumerate() {
+            if self.free[i].is_none() {
+                continue;
+            }
+            let c = self.shapes[i].centroid;
+            let poly = b
+                .polygon
+                .displaced(c, &self.d[i])
+                .map_err(|_| SimError::Inverted {
+                    t: self.t,
+                    block: self.model.blocks[i].id.clone(),
+                })?;
+            moved.push(poly);
+        }
+        let dynamic = self.model.params.mode == Mode::Dynamic;
+        let mut moved = moved.into_iter();
+        for i in 0..self.blocks.len() {
+            if self.free[i].is_none() {
+                continue;
+            }
+            let d = self.d[i];
+            let c = self.shapes[i].centroid;
+            let b = &mut self.blocks[i];
+            if let Some(poly) = moved.next() {
+                b.polygon = poly;
+            }
+            for v in 0..6 {
+                b.velocity[v] = if dynamic {
+                    2.0 * d[v] / dt - b.velocity[v]
+                } else {
+                    0.0
+                };
+            }
+            if self.effects.elasticity {
+                let mat = self.model.materials[self.model.blocks[i].material];
+                let e = elasticity(mat.young, mat.poisson);
+                for a in 0..3 {
+                    b.stress[a] += (0..3).map(|q| e[a][q] * d[3 + q]).sum::<f64>();
+                }
+            }
+            b.rotation += d[2];
+            for (at, _) in b.loads.iter_mut() {
+                *at = displace_point(*at, c, &d);
+            }
+            for (now, _) in b.fixed_points.iter_mut() {
+                *now = displace_point(*now, c, &d);
+            }
+            self.shapes[i].set(&b.polygon);
+        }
+        self.t += dt;
+        Ok(())
+    }
+
+    /// Kinetic energy of the free blocks, 1/2 V^T M V.
+    pub fn kinetic_energy(&self) -> f64 {
+        let mut e = 0.0;
+        for (i, b) in self.blocks.iter().enumerate() {
+            if self.free[i].is_none() {
+                continue;
+            }
+            let mat = self.model.materials[self.model.blocks[i].material];
+            let m = mass_matrix(&b.polygon.moments(), mat.density);
+            let v = &b.velocity;
+            for a in 0..6 {
+                for bb in 0..6 {
+                    e += 0.5 * v[a] * m[a][bb] * v[bb];
+                }
+            }
+        }
+        e
+    }
+}
+
+/// Adds the spring p q^2 / 2 of `row` to the system (fixed blocks contribute nothing).
+fn add_spring(
+    sys: &mut BlockSystem,
+    free: &[Option<u32>],
+    pair_entry: Option<Entry>,
+    p: f64,
+    row: &Row,
+) {
+    let fa = free[row.blocks[0] as usize];
+    let fb = free[row.blocks[1] as usize];
+    for (f, c) in [(fa, &row.c[0]), (fb, &row.c[1])] {
+        if let Some(f) = f {
+            sys.add_outer(sys.diagonal(f), f, f, p, c, c);
+            sys.add_rhs(f, -p * row.g0, c);
+        }
+    }
+    if let (Some(a), Some(b), Some(e)) = (fa, fb, pair_entry) {
+        sys.add_outer(e, a, b, p, &row.c[0], &row.c[1]);
+    }
+}
+
+/// Adds a force of magnitude `f` along the measure of `row` to both blocks.
+fn add_force(sys: &mut BlockSystem, free: &[Option<u32>], f: f64, row: &Row) {
+    for (b, c) in row.blocks.iter().zip(&row.c) {
+        if let Some(fi) = free[*b as usize] {
+            sys.add_rhs(fi, f, c);
+        }
+    }
+}

@@ -1,0 +1,785 @@
+//! The scene file (DESIGN 5.1): TOML, or JSON of the same structure, read with serde into
+//! [`Scene`] and validated into a [`Model`] the engine runs. Unknown keys and invalid
+//! values are errors naming the file, the key path and the line.
+
+use crate::locate::{LineIndex, line_at};
+use dda_geom::{ConvexPolygon, DVec2, PolygonError};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// A scene as written in a file: the analysis settings, materials, joints and blocks.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Scene name (names the output directory).
+    pub name: String,
+    /// Analysis settings.
+    pub analysis: Analysis,
+    /// Materials by name.
+    #[serde(default)]
+    pub materials: BTreeMap<String, Material>,
+    /// Contact properties by name; `default` applies to every pair no other joint names.
+    #[serde(default)]
+    pub joints: BTreeMap<String, Joint>,
+    /// The blocks.
+    #[serde(default)]
+    pub blocks: Vec<BlockSpec>,
+}
+
+/// Dynamic (inertia carried from step to step) or static (velocities zeroed each step).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Mode {
+    /// Velocities carried over (Shi's dynamic coefficient 1).
+    #[default]
+    Dynamic,
+    /// Velocities zeroed at each step start (Shi's dynamic coefficient 0).
+    Static,
+}
+
+/// Plane stress or plane strain elasticity.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Plane {
+    /// Plane stress.
+    #[default]
+    Stress,
+    /// Plane strain: E' = E/(1-nu^2), nu' = nu/(1-nu).
+    Strain,
+}
+
+/// The `[analysis]` table.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Analysis {
+    /// Dynamic or static.
+    #[serde(default)]
+    pub mode: Mode,
+    /// Simulated time, s.
+    pub duration: f64,
+    /// Initial (and largest) time step, s.
+    pub time_step: f64,
+    /// d_max: largest vertex displacement allowed in a step, m.
+    pub max_displacement: f64,
+    /// theta_max: largest rotation allowed in a step, degrees.
+    #[serde(default = "default_max_rotation_deg")]
+    pub max_rotation_deg: f64,
+    /// d_tol, m; default 2 d_max (paper section 2.6).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub contact_tolerance: Option<f64>,
+    /// Normal contact penalty p, N/m.
+    pub normal_penalty: f64,
+    /// Shear contact penalty, N/m; default the normal penalty.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shear_penalty: Option<f64>,
+    /// Penalty of fixed points, N/m; default 100 times the normal penalty.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fixed_penalty: Option<f64>,
+    /// Contact detector: "cover", "type-1" or "type-2".
+    #[serde(default = "default_detector")]
+    pub detector: String,
+    /// Body acceleration (gx, gy), m/s^2; no key, no gravity effect.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gravity: Option<[f64; 2]>,
+    /// Deformable blocks (6 DOF) or rigid (3 DOF).
+    #[serde(default = "default_true")]
+    pub deformable: bool,
+    /// Plane stress or strain.
+    #[serde(default)]
+    pub plane: Plane,
+    /// Largest number of open-close iterations before the step is cut.
+    #[serde(default = "default_max_oci")]
+    pub max_oci: u32,
+    /// Number of SVG frames over the run (plus the initial one); 0 for none.
+    #[serde(default = "default_frames")]
+    pub frames: u32,
+}
+
+fn default_max_rotation_deg() -> f64 {
+    2.0
+}
+fn default_detector() -> String {
+    "cover".to_string()
+}
+fn default_true() -> bool {
+    true
+}
+fn default_max_oci() -> u32 {
+    6
+}
+fn default_frames() -> u32 {
+    10
+}
+
+/// A `[materials.NAME]` table.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    /// Density, kg/m^3 (mass per unit area of the 2D block per unit thickness).
+    pub density: f64,
+    /// Young's modulus, Pa (needed when blocks are deformable).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub young: Option<f64>,
+    /// Poisson's ratio (needed when blocks are deformable).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub poisson: Option<f64>,
+}
+
+/// A `[joints.NAME]` table: contact properties.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Joint {
+    /// Friction angle, degrees.
+    #[serde(default)]
+    pub friction_deg: f64,
+    /// Cohesion, Pa (force per unit contact length per unit thickness).
+    #[serde(default)]
+    pub cohesion: f64,
+    /// Tensile strength, Pa.
+    #[serde(default)]
+    pub tensile_strength: f64,
+    /// The two materials this joint applies between; absent for `default`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub between: Option<[String; 2]>,
+}
+
+/// A point load, moving with its block.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Load {
+    /// Point of application, m.
+    pub at: [f64; 2],
+    /// Force, N.
+    pub force: [f64; 2],
+}
+
+/// A `[[blocks]]` entry.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BlockSpec {
+    /// Block id, unique in the scene.
+    pub id: String,
+    /// Material name.
+    pub material: String,
+    /// Vertices `[x, y]`, either orientation.
+    pub vertices: Vec<[f64; 2]>,
+    /// Whether the block is fixed (its DOFs are eliminated).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub fixed: bool,
+    /// Initial centroid velocity, m/s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub velocity: Option<[f64; 2]>,
+    /// Initial angular velocity, rad/s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub angular_velocity: Option<f64>,
+    /// Initial stress (sx, sy, txy), Pa.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stress: Option<[f64; 3]>,
+    /// Point loads.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub loads: Vec<Load>,
+    /// Points of the block held at their place by stiff springs.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub fixed_points: Vec<[f64; 2]>,
+}
+
+/// A scene that could not be read or is invalid: where, and what is wrong.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{}", self.render())]
+pub struct SceneError {
+    /// The file (or the built-in scene's name).
+    pub file: String,
+    /// Key path, e.g. `blocks[3].vertices[2]`; empty for the whole document.
+    pub key: String,
+    /// 1-based line, when known.
+    pub line: Option<usize>,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl SceneError {
+    fn render(&self) -> String {
+        let mut s = self.file.clone();
+        if let Some(l) = self.line {
+            s.push_str(&format!(":{l}"));
+        }
+        if !self.key.is_empty() {
+            s.push_str(&format!(": key `{}`", self.key));
+        }
+        s.push_str(": ");
+        s.push_str(&self.message);
+        s
+    }
+}
+
+/// A validation failure before the file and line are known: key path and message.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Invalid {
+    /// Key path.
+    pub key: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+fn invalid(key: impl Into<String>, message: impl Into<String>) -> Invalid {
+    Invalid {
+        key: key.into(),
+        message: message.into(),
+    }
+}
+
+/// File formats of a scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// TOML (`.toml`).
+    Toml,
+    /// JSON (`.json`).
+    Json,
+}
+
+impl Scene {
+    /// Reads and validates the scene file at `path` (format from its extension).
+    pub fn load(path: &Path) -> Result<(Scene, Model), SceneError> {
+        let file = path.display().to_string();
+        let fail = |message: String| SceneError {
+            file: file.clone(),
+            key: String::new(),
+            line: None,
+            message,
+        };
+        let format = match path.extension().and_then(|e| e.to_str()) {
+            Some("toml") => Format::Toml,
+            Some("json") => Format::Json,
+            _ => {
+                return Err(fail(
+                    "unknown scene format: the file name must end in .toml or .json".into(),
+                ));
+            }
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| fail(format!("cannot read: {e}")))?;
+        Scene::parse(&text, format, &file)
+    }
+
+    /// Parses and validates scene text; `file` names it in errors.
+    pub fn parse(text: &str, format: Format, file: &str) -> Result<(Scene, Model), SceneError> {
+        let index = match format {
+            Format::Toml => LineIndex::toml(text),
+            Format::Json => LineIndex::json(text),
+        };
+        let error = |key: String, line: Option<usize>, message: String| SceneError {
+            file: file.to_string(),
+            line: index.line(&key).or(line),
+            key,
+            message,
+        };
+        let scene: Scene = match format {
+            Format::Toml => {
+                let de = toml::Deserializer::parse(text).map_err(|e| {
+                    error(
+                        String::new(),
+                        e.span().map(|s| line_at(text, s.start)),
+                        e.message().to_string(),
+                    )
+                })?;
+                serde_path_to_error::deserialize(de).map_err(|e| {
+                    let key = path_string(e.path());
+                    let inner = e.into_inner();
+                    let line = inner.span().map(|s| line_at(text, s.start));
+                    // The error's own span is exact; the index only knows the key.
+                    SceneError {
+                        file: file.to_string(),
+                        line: line.or_else(|| index.line(&key)),
+                        key,
+                        message: inner.message().to_string(),
+                    }
+                })?
+            }
+            Format::Json => {
+                let mut de = serde_json::Deserializer::from_str(text);
+                let scene = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+                    let key = path_string(e.path());
+                    let inner = e.into_inner();
+                    SceneError {
+                        file: file.to_string(),
+                        line: Some(inner.line()),
+                        key,
+                        message: strip_position(&inner.to_string()),
+                    }
+                })?;
+                de.end().map_err(|e| {
+                    error(
+                        String::new(),
+                        Some(e.line()),
+                        strip_position(&e.to_string()),
+                    )
+                })?;
+                scene
+            }
+        };
+        let model = scene
+            .validate()
+            .map_err(|v| error(v.key, None, v.message))?;
+        Ok((scene, model))
+    }
+
+    /// Multiplies the contact tolerance and the largest step displacement by `r`
+    /// (the paper's contact tolerance ratio r_tol, eq. 15).
+    pub fn scale_tolerances(&mut self, r: f64) {
+        let a = &mut self.analysis;
+        a.contact_tolerance = Some(a.contact_tolerance.unwrap_or(2.0 * a.max_displacement) * r);
+        a.max_displacement *= r;
+    }
+
+    /// Checks every value and builds the model the engine runs.
+    pub fn validate(&self) -> Result<Model, Invalid> {
+        if self.name.trim().is_empty() {
+            return Err(invalid("name", "must not be empty"));
+        }
+        let params = self.analysis.validate()?;
+        let mut names: Vec<&String> = self.materials.keys().collect();
+        names.sort();
+        let mut materials = Vec::new();
+        for name in &names {
+            let m = &self.materials[*name];
+            let key = format!("materials.{name}");
+            materials.push(m.validate(&key, &params)?);
+        }
+        let mat_index =
+            |name: &str| -> Option<usize> { names.iter().position(|n| n.as_str() == name) };
+
+        // Joint table: `default` everywhere, then `between` joints on their pairs.
+        let nm = names.len();
+        let mut joints = vec![JointProps::default()];
+        let mut joint_of = vec![0u16; nm * nm];
+        if let Some(j) = self.joints.get("default") {
+            if j.between.is_some() {
+                return Err(invalid(
+                    "joints.default.between",
+                    "the default joint applies to every pair; name another joint to restrict it",
+                ));
+            }
+            joints[0] = j.validate("joints.default")?;
+        }
+        for (name, j) in &self.joints {
+            if name == "default" {
+                continue;
+            }
+            let key = format!("joints.{name}");
+            let Some([m1, m2]) = &j.between else {
+                return Err(invalid(
+                    format!("{key}.between"),
+                    "a joint other than `default` needs `between = [material, material]`",
+                ));
+            };
+            let find = |m: &str| {
+                mat_index(m).ok_or_else(|| {
+                    invalid(format!("{key}.between"), format!("no material named `{m}`"))
+                })
+            };
+            let (a, b) = (find(m1)?, find(m2)?);
+            joints.push(j.validate(&key)?);
+            let k = (joints.len() - 1) as u16;
+            joint_of[a * nm + b] = k;
+            joint_of[b * nm + a] = k;
+        }
+
+        if self.blocks.is_empty() {
+            return Err(invalid("blocks", "a scene needs at least one block"));
+        }
+        let mut blocks = Vec::with_capacity(self.blocks.len());
+        let mut seen: BTreeMap<&str, usize> = BTreeMap::new();
+        for (i, b) in self.blocks.iter().enumerate() {
+            let key = format!("blocks[{i}]");
+            if b.id.trim().is_empty() {
+                return Err(invalid(format!("{key}.id"), "must not be empty"));
+            }
+            if let Some(first) = seen.insert(&b.id, i) {
+                return Err(invalid(
+                    format!("{key}.id"),
+                    format!("duplicate block id `{}` (also blocks[{first}])", b.id),
+                ));
+            }
+            let material = mat_index(&b.material).ok_or_else(|| {
+                invalid(
+                    format!("{key}.material"),
+                    format!(
+                        "no material named `{}` (defined: {})",
+                        b.material,
+                        if names.is_empty() {
+                            "none".to_string()
+                        } else {
+                            names
+                                .iter()
+                                .map(|s| s.as_str())
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        }
+                    ),
+                )
+            })?;
+            blocks.push(b.validate(&key, material)?);
+        }
+        Ok(Model {
+            name: self.name.clone(),
+            params,
+            materials,
+            joints,
+            joint_of,
+            blocks,
+        })
+    }
+}
+
+/// `serde_path_to_error`'s path as `a.b[3].c`.
+fn path_string(path: &serde_path_to_error::Path) -> String {
+    use serde_path_to_error::Segment;
+    let mut s = String::new();
+    for seg in path.iter() {
+        match seg {
+            Segment::Seq { index } => s.push_str(&format!("[{index}]")),
+            Segment::Map { key } | Segment::Enum { variant: key } => {
+                if !s.is_empty() {
+                    s.push('.');
+                }
+                s.push_str(key);
+            }
+            Segment::Unknown => {}
+        }
+    }
+    s
+}
+
+/// serde_json's message without its " at line L column C" suffix (we print the line).
+fn strip_position(msg: &str) -> String {
+    match msg.rfind(" at line ") {
+        Some(i) => msg[..i].to_string(),
+        None => msg.to_string(),
+    }
+}
+
+fn finite_positive(key: &str, v: f64) -> Result<f64, Invalid> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(invalid(key, format!("must be a positive number, got {v}")))
+    }
+}
+
+fn finite_non_negative(key: &str, v: f64) -> Result<f64, Invalid> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(invalid(key, format!("must be zero or positive, got {v}")))
+    }
+}
+
+fn finite_vec(key: &str, v: &[f64]) -> Result<(), Invalid> {
+    match v.iter().position(|x| !x.is_finite()) {
+        Some(i) => Err(invalid(format!("{key}[{i}]"), "must be a finite number")),
+        None => Ok(()),
+    }
+}
+
+/// The validated analysis settings, in SI units and radians.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Params {
+    /// Dynamic or static.
+    pub mode: Mode,
+    /// Simulated time, s.
+    pub duration: f64,
+    /// Initial and largest time step, s.
+    pub dt0: f64,
+    /// d_max, m.
+    pub d_max: f64,
+    /// theta_max, rad.
+    pub theta_max: f64,
+    /// d_tol, m.
+    pub d_tol: f64,
+    /// Normal penalty, N/m.
+    pub normal_penalty: f64,
+    /// Shear penalty, N/m.
+    pub shear_penalty: f64,
+    /// Fixed-point penalty, N/m.
+    pub fixed_penalty: f64,
+    /// Detector name.
+    pub detector: String,
+    /// Gravity, if the scene asks for it.
+    pub gravity: Option<DVec2>,
+    /// 6 DOF per block (true) or 3.
+    pub deformable: bool,
+    /// Plane stress or strain.
+    pub plane: Plane,
+    /// OCI iteration bound.
+    pub max_oci: u32,
+    /// SVG frames over the run.
+    pub frames: u32,
+}
+
+impl Analysis {
+    fn validate(&self) -> Result<Params, Invalid> {
+        let k = |s: &str| format!("analysis.{s}");
+        let duration = finite_positive(&k("duration"), self.duration)?;
+        let dt0 = finite_positive(&k("time_step"), self.time_step)?;
+        let d_max = finite_positive(&k("max_displacement"), self.max_displacement)?;
+        let theta_deg = finite_positive(&k("max_rotation_deg"), self.max_rotation_deg)?;
+        if theta_deg > 30.0 {
+            return Err(invalid(
+                k("max_rotation_deg"),
+                format!("must be at most 30 degrees per step, got {theta_deg}"),
+            ));
+        }
+        let d_tol = match self.contact_tolerance {
+            Some(v) => finite_positive(&k("contact_tolerance"), v)?,
+            None => 2.0 * d_max,
+        };
+        let normal_penalty = finite_positive(&k("normal_penalty"), self.normal_penalty)?;
+        let shear_penalty = match self.shear_penalty {
+            Some(v) => finite_positive(&k("shear_penalty"), v)?,
+            None => normal_penalty,
+        };
+        let fixed_penalty = match self.fixed_penalty {
+            Some(v) => finite_positive(&k("fixed_penalty"), v)?,
+            None => 100.0 * normal_penalty,
+        };
+        if dda_contact::detector_by_name(&self.detector).is_err() {
+            return Err(invalid(
+                k("detector"),
+                format!(
+                    "unknown detector `{}` (expected one of: {})",
+                    self.detector,
+                    dda_contact::DETECTOR_NAMES.join(", ")
+                ),
+            ));
+        }
+        if let Some(g) = &self.gravity {
+            finite_vec(&k("gravity"), g)?;
+        }
+        if self.max_oci == 0 || self.max_oci > 100 {
+            return Err(invalid(
+                k("max_oci"),
+                format!("must be between 1 and 100, got {}", self.max_oci),
+            ));
+        }
+        if self.frames > 100_000 {
+            return Err(invalid(k("frames"), "must be at most 100000"));
+        }
+        Ok(Params {
+            mode: self.mode,
+            duration,
+            dt0,
+            d_max,
+            theta_max: theta_deg.to_radians(),
+            d_tol,
+            normal_penalty,
+            shear_penalty,
+            fixed_penalty,
+            detector: self.detector.clone(),
+            gravity: self.gravity.map(DVec2::from),
+            deformable: self.deformable,
+            plane: self.plane,
+            max_oci: self.max_oci,
+            frames: self.frames,
+        })
+    }
+}
+
+/// Validated material constants; the elastic ones already converted for plane strain.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MaterialProps {
+    /// Density, kg/m^3.
+    pub density: f64,
+    /// Effective Young's modulus (E, or E/(1-nu^2) in plane strain), Pa.
+    pub young: f64,
+    /// Effective Poisson's ratio (nu, or nu/(1-nu) in plane strain).
+    pub poisson: f64,
+}
+
+impl Material {
+    fn validate(&self, key: &str, params: &Params) -> Result<MaterialProps, Invalid> {
+        let density = finite_positive(&format!("{key}.density"), self.density)?;
+        if !params.deformable {
+            return Ok(MaterialProps {
+                density,
+                young: 0.0,
+                poisson: 0.0,
+            });
+        }
+        let young = match self.young {
+            Some(e) => finite_positive(&format!("{key}.young"), e)?,
+            None => {
+                return Err(invalid(
+                    format!("{key}.young"),
+                    "deformable blocks need Young's modulus (or set analysis.deformable = false)",
+                ));
+            }
+        };
+        let nu = match self.poisson {
+            Some(nu) if nu.is_finite() && (0.0..0.5).contains(&nu) => nu,
+            Some(nu) => {
+                return Err(invalid(
+                    format!("{key}.poisson"),
+                    format!("must be in [0, 0.5), got {nu}"),
+                ));
+            }
+            None => {
+                return Err(invalid(
+                    format!("{key}.poisson"),
+                    "deformable blocks need Poisson's ratio (or set analysis.deformable = false)",
+                ));
+            }
+        };
+        let (young, poisson) = match params.plane {
+            Plane::Stress => (young, nu),
+            Plane::Strain => (young / (1.0 - nu * nu), nu / (1.0 - nu)),
+        };
+        Ok(MaterialProps {
+            density,
+            young,
+            poisson,
+        })
+    }
+}
+
+/// Validated contact properties.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct JointProps {
+    /// tan(friction angle).
+    pub tan_phi: f64,
+    /// Cohesion, Pa.
+    pub cohesion: f64,
+    /// Tensile strength, Pa.
+    pub tensile_strength: f64,
+}
+
+impl JointProps {
+    /// Whether contacts of this joint need shear springs (friction or cohesion).
+    pub fn has_shear(&self) -> bool {
+        self.tan_phi > 0.0 || self.cohesion > 0.0
+    }
+
+    /// Whether contacts of this joint start bonded (cohesion or tensile strength).
+    pub fn bonds(&self) -> bool {
+        self.cohesion > 0.0 || self.tensile_strength > 0.0
+    }
+}
+
+impl Joint {
+    fn validate(&self, key: &str) -> Result<JointProps, Invalid> {
+        let phi = self.friction_deg;
+        if !(phi.is_finite() && (0.0..90.0).contains(&phi)) {
+            return Err(invalid(
+                format!("{key}.friction_deg"),
+                format!("must be in [0, 90) degrees, got {phi}"),
+            ));
+        }
+        Ok(JointProps {
+            tan_phi: phi.to_radians().tan(),
+            cohesion: finite_non_negative(&format!("{key}.cohesion"), self.cohesion)?,
+            tensile_strength: finite_non_negative(
+                &format!("{key}.tensile_strength"),
+                self.tensile_strength,
+            )?,
+        })
+    }
+}
+
+/// A validated block.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModelBlock {
+    /// Block id.
+    pub id: String,
+    /// Index into [`Model::materials`].
+    pub material: usize,
+    /// Its polygon (counter-clockwise, convex).
+    pub polygon: ConvexPolygon,
+    /// DOFs eliminated.
+    pub fixed: bool,
+    /// Initial velocity (u0, v0, r0, ex, ey, gxy) rates.
+    pub velocity: [f64; 6],
+    /// Initial stress (sx, sy, txy), Pa.
+    pub stress: [f64; 3],
+    /// Point loads: point, force.
+    pub loads: Vec<(DVec2, DVec2)>,
+    /// Fixed points.
+    pub fixed_points: Vec<DVec2>,
+}
+
+impl BlockSpec {
+    fn validate(&self, key: &str, material: usize) -> Result<ModelBlock, Invalid> {
+        for (i, v) in self.vertices.iter().enumerate() {
+            finite_vec(&format!("{key}.vertices[{i}]"), v)?;
+        }
+        let polygon = ConvexPolygon::from_coords(&self.vertices).map_err(|e| {
+            let at = match e {
+                PolygonError::DuplicateVertex { vertex, .. }
+                | PolygonError::CollinearVertex { vertex }
+                | PolygonError::NotConvex { vertex } => format!("{key}.vertices[{vertex}]"),
+                _ => format!("{key}.vertices"),
+            };
+            invalid(at, format!("block `{}`: {e}", self.id))
+        })?;
+        let mut velocity = [0.0; 6];
+        if let Some(v) = &self.velocity {
+            finite_vec(&format!("{key}.velocity"), v)?;
+            velocity[0] = v[0];
+            velocity[1] = v[1];
+        }
+        if let Some(w) = self.angular_velocity {
+            finite_vec(&format!("{key}.angular_velocity"), &[w])?;
+            velocity[2] = w;
+        }
+        let mut stress = [0.0; 3];
+        if let Some(s) = &self.stress {
+            finite_vec(&format!("{key}.stress"), s)?;
+            stress = *s;
+        }
+        let mut loads = Vec::new();
+        for (i, l) in self.loads.iter().enumerate() {
+            finite_vec(&format!("{key}.loads[{i}].at"), &l.at)?;
+            finite_vec(&format!("{key}.loads[{i}].force"), &l.force)?;
+            loads.push((DVec2::from(l.at), DVec2::from(l.force)));
+        }
+        let mut fixed_points = Vec::new();
+        for (i, p) in self.fixed_points.iter().enumerate() {
+            finite_vec(&format!("{key}.fixed_points[{i}]"), p)?;
+            fixed_points.push(DVec2::from(*p));
+        }
+        Ok(ModelBlock {
+            id: self.id.clone(),
+            material,
+            polygon,
+            fixed: self.fixed,
+            velocity,
+            stress,
+            loads,
+            fixed_points,
+        })
+    }
+}
+
+/// A validated scene, ready to run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Model {
+    /// Scene name.
+    pub name: String,
+    /// Analysis settings.
+    pub params: Params,
+    /// Materials, in name order.
+    pub materials: Vec<MaterialProps>,
+    /// Joints; index 0 is the default.
+    pub joints: Vec<JointProps>,
+    /// Joint index for each ordered pair of materials (row-major, materials^2).
+    pub joint_of: Vec<u16>,
+    /// Blocks in scene order.
+    pub blocks: Vec<ModelBlock>,
+}
+
+impl Model {
+    /// The joint acting between blocks `a` and `b`.
+    pub fn joint_between(&self, a: usize, b: usize) -> &JointProps {
+        let nm = self.materials.len();
+        let (ma, mb) = (self.blocks[a].material, self.blocks[b].material);
+        &self.joints[self.joint_of[ma * nm + mb] as usize]
+    }
+}

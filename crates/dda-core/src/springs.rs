@@ -1,0 +1,150 @@
+//! Contact springs as linear constraint rows (DESIGN 3).
+//!
+//! Every spring of the engine measures one quantity that is, to first order, linear in the
+//! unknowns of at most two blocks: q(D) = g0 + c_a . D_a + c_b . D_b. A spring of
+//! stiffness p on q adds the energy p q^2 / 2, that is K_xy += p c_x c_y^T and
+//! F_x -= p g0 c_x; a force f along q adds F_x += f c_x. The normal spring, the shear
+//! spring, the friction force and the fixed-point springs are all this one mechanism.
+
+use crate::kinematics::{Vec6, along, dot, t_rows};
+use dda_contact::{BlockShape, Contact};
+use dda_geom::DVec2;
+
+/// A linear measure over the unknowns of (up to) two blocks.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Row {
+    /// Value at D = 0 (at step start).
+    pub g0: f64,
+    /// The two blocks (scene indices): the vertex's and the edge's.
+    pub blocks: [u32; 2],
+    /// Coefficients over each block's unknowns.
+    pub c: [Vec6; 2],
+}
+
+impl Row {
+    /// The measure for block motions `d` (indexed by scene block).
+    #[inline]
+    pub fn eval(&self, d: &[Vec6]) -> f64 {
+        self.g0
+            + dot(&self.c[0], &d[self.blocks[0] as usize], 6)
+            + dot(&self.c[1], &d[self.blocks[1] as usize], 6)
+    }
+}
+
+/// The points of a contact at step start: vertex P1 of the vertex block, edge P2 -> P3 of
+/// the edge block.
+#[inline]
+pub fn contact_points(c: &Contact, shapes: &[BlockShape]) -> (DVec2, DVec2, DVec2) {
+    let k = c.key;
+    let vs = &shapes[k.vertex_block as usize];
+    let es = &shapes[k.edge_block as usize];
+    (
+        vs.vertices[k.vertex as usize],
+        es.vertices[k.edge as usize],
+        es.vertices[es.next(k.edge as usize)],
+    )
+}
+
+/// The normal distance of a vertex-edge contact after the step, to first order:
+/// d = (S0 + H^T D_i + G^T D_j) / l with S0 = det[[1,x1,y1],[1,x3,y3],[1,x2,y2]]
+/// (DESIGN 3; S0 / l is the paper's d_n, eq. 7). Its translational parts are equal and
+/// opposite, so the spring conserves momentum.
+pub fn normal_row(c: &Contact, shapes: &[BlockShape]) -> Row {
+    let (p1, p2, p3) = contact_points(c, shapes);
+    let k = c.key;
+    let ci = shapes[k.vertex_block as usize].centroid;
+    let cj = shapes[k.edge_block as usize].centroid;
+    let l = (p3 - p2).length();
+    let s0 = (p3.x - p1.x) * (p2.y - p1.y) - (p2.x - p1.x) * (p3.y - p1.y);
+    let ti = t_rows(p1, ci);
+    let (t2, t3) = (t_rows(p2, cj), t_rows(p3, cj));
+    let h = [p3.y - p2.y, p2.x - p3.x];
+    let g2 = [p1.y - p3.y, p3.x - p1.x];
+    let g3 = [p2.y - p1.y, p1.x - p2.x];
+    let inv = 1.0 / l;
+    let e: Vec6 = std::array::from_fn(|m| inv * (h[0] * ti[0][m] + h[1] * ti[1][m]));
+    let g: Vec6 = std::array::from_fn(|m| {
+        inv * (g2[0] * t2[0][m] + g2[1] * t2[1][m] + g3[0] * t3[0][m] + g3[1] * t3[1][m])
+    });
+    Row {
+        g0: s0 * inv,
+        blocks: [k.vertex_block, k.edge_block],
+        c: [e, g],
+    }
+}
+
+/// The tangential displacement of the vertex relative to the point at ratio `anchor`
+/// along the edge (a material point of the edge block), measured along the edge's unit
+/// tangent: the shear spring's and the friction force's row.
+pub fn shear_row(c: &Contact, shapes: &[BlockShape], anchor: f64) -> Row {
+    let (p1, p2, p3) = contact_points(c, shapes);
+    let k = c.key;
+    let ci = shapes[k.vertex_block as usize].centroid;
+    let cj = shapes[k.edge_block as usize].centroid;
+    let t = (p3 - p2).normalize();
+    let p0 = p2 + anchor * (p3 - p2);
+    let mut cb = along(t, p0, cj);
+    for v in cb.iter_mut() {
+        *v = -*v;
+    }
+    Row {
+        g0: (p1 - p0).dot(t),
+        blocks: [k.vertex_block, k.edge_block],
+        c: [along(t, p1, ci), cb],
+    }
+}
+
+/// Length of the edge a contact's vertex lies against: the cohesion and tensile strength
+/// act over half of it (each end of a face-to-face contact carries half; a choice where
+/// DESIGN 3 and the paper are silent).
+pub fn contact_length(c: &Contact, shapes: &[BlockShape]) -> f64 {
+    0.5 * shapes[c.key.edge_block as usize].lengths[c.key.edge as usize]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use dda_contact::ContactKey;
+    use dda_geom::{ConvexPolygon, displace_point};
+
+    fn square(x: f64, y: f64) -> ConvexPolygon {
+        ConvexPolygon::from_coords(&[[x, y], [x + 1.0, y], [x + 1.0, y + 1.0], [x, y + 1.0]])
+            .unwrap()
+    }
+
+    /// The normal row's value equals d_n at D = 0 and is the first-order expansion of
+    /// S0 / l with l held at its step-start value (DESIGN 3): against the exact S0 after a
+    /// motion of size h, divided by the step-start l, the error is O(h^2).
+    #[test]
+    fn normal_row_is_the_linearised_distance() {
+        let a = square(0.2, 1.01); // above, vertex 0 at (0.2, 1.01)
+        let b = square(0.0, 0.0); // edge 2: (1,1) -> (0,1)
+        let shapes = [BlockShape::new(&a), BlockShape::new(&b)];
+        let key = ContactKey {
+            vertex_block: 0,
+            vertex: 0,
+            edge_block: 1,
+            edge: 2,
+        };
+        let c = Contact::new(key, 0.01, 0.8, true);
+        let row = normal_row(&c, &shapes);
+        assert!((row.g0 - 0.01).abs() < 1e-15);
+        for h in [1e-3, 1e-4] {
+            let d = [
+                [0.3 * h, -0.7 * h, 0.5 * h, 0.1 * h, -0.2 * h, 0.3 * h],
+                [-0.1 * h, 0.2 * h, -0.4 * h, 0.2 * h, 0.1 * h, -0.1 * h],
+            ];
+            let p1 = displace_point(a.vertex(0), a.centroid(), &d[0]);
+            let p2 = displace_point(b.vertex(2), b.centroid(), &d[1]);
+            let p3 = displace_point(b.vertex(3), b.centroid(), &d[1]);
+            // Exact S0 after the motion over the step-start length.
+            let l0 = (b.vertex(3) - b.vertex(2)).length();
+            let exact = dda_geom::normal_distance(p1, p2, p3) * (p3 - p2).length() / l0;
+            let err = (row.eval(&d) - exact).abs();
+            assert!(err < 10.0 * h * h, "h = {h}: error {err}");
+        }
+        // Translational parts equal and opposite.
+        assert!((row.c[0][0] + row.c[1][0]).abs() < 1e-15);
+        assert!((row.c[0][1] + row.c[1][1]).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,139 @@
+//! The run summary (DESIGN 5.3): the fields other tools read, plus a few more. Timing
+//! fields live under `seconds` so that comparisons of two runs can leave them out.
+
+use crate::engine::Simulation;
+use serde::{Deserialize, Serialize};
+
+/// Wall-clock seconds of a run, by phase.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Seconds {
+    /// Whole run (stepping).
+    pub total: f64,
+    /// Contact detection (step start and trajectory tracking).
+    pub contact_detection: f64,
+    /// Assembly of the system and contact checks.
+    pub assembly: f64,
+    /// Numeric factorisation and solve.
+    pub solve: f64,
+}
+
+/// A block at the end of a run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BlockSummary {
+    /// Block id.
+    pub id: String,
+    /// Centroid, m.
+    pub centroid: [f64; 2],
+    /// Centroid velocity, m/s.
+    pub velocity: [f64; 2],
+    /// Accumulated rotation, rad.
+    pub rotation: f64,
+}
+
+/// summary.json.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Summary {
+    /// Scene name.
+    pub scene: String,
+    /// Detector name.
+    pub detector: String,
+    /// Effects assembled.
+    pub effects: Vec<String>,
+    /// "completed" or "failed".
+    pub status: String,
+    /// Why the run stopped early, if it did.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+    /// Simulated time reached, s.
+    pub time_simulated: f64,
+    /// Completed steps.
+    pub steps: u64,
+    /// OCI iterations (including discarded attempts).
+    pub oci_iterations: u64,
+    /// Discarded attempts (time-step cuts).
+    pub time_step_cuts: u64,
+    /// Contact tolerance d_tol used, m.
+    pub contact_tolerance: f64,
+    /// Largest step displacement d_max used, m.
+    pub max_displacement: f64,
+    /// Unknowns of the global system.
+    pub unknowns: usize,
+    /// Shear springs assembled over the run (0 for a frictionless scene).
+    pub shear_springs: u64,
+    /// Symbolic factorisations (pattern changes).
+    pub symbolic_factorisations: u64,
+    /// Numeric factorisations.
+    pub numeric_factorisations: u64,
+    /// Wall-clock seconds.
+    pub seconds: Seconds,
+    /// Largest penetration after any step, m.
+    pub max_penetration: f64,
+    /// Blocks at the end.
+    pub blocks: Vec<BlockSummary>,
+}
+
+impl Summary {
+    /// The summary of `sim` as it stands; `error` if the run stopped early.
+    pub fn of(sim: &Simulation, error: Option<String>) -> Self {
+        let t = sim.totals();
+        let (sym, num) = sim.factorisations();
+        let p = &sim.model().params;
+        Summary {
+            scene: sim.model().name.clone(),
+            detector: sim.detector_name().to_string(),
+            effects: sim
+                .effects()
+                .names()
+                .iter()
+                .map(|s| s.to_string())
+                .collect(),
+            status: if error.is_some() {
+                "failed"
+            } else {
+                "completed"
+            }
+            .to_string(),
+            error,
+            time_simulated: sim.time(),
+            steps: t.steps,
+            oci_iterations: t.oci_iterations,
+            time_step_cuts: t.cuts,
+            contact_tolerance: p.d_tol,
+            max_displacement: p.d_max,
+            unknowns: sim.unknowns(),
+            shear_springs: t.shear_springs,
+            symbolic_factorisations: sym,
+            numeric_factorisations: num,
+            seconds: Seconds {
+                total: t.total_s,
+                contact_detection: t.detection_s,
+                assembly: t.assembly_s,
+                solve: t.solve_s,
+            },
+            max_penetration: t.max_penetration,
+            blocks: sim
+                .model()
+                .blocks
+                .iter()
+                .zip(sim.blocks())
+                .map(|(m, b)| {
+                    let c = b.polygon.centroid();
+                    BlockSummary {
+                        id: m.id.clone(),
+                        centroid: [c.x, c.y],
+                        velocity: [b.velocity[0], b.velocity[1]],
+                        rotation: b.rotation,
+                    }
+                })
+                .collect(),
+        }
+    }
+
+    /// A copy with the timing fields zeroed, for run-to-run comparison.
+    pub fn without_timing(&self) -> Self {
+        Summary {
+            seconds: Seconds::default(),
+            ..self.clone()
+        }
+    }
+}
