@@ -6,7 +6,7 @@
 //! - [`geom`]: convex polygons, entrance blocks, cutting by joint sets.
 //! - [`contact`]: neighbour search, the contact detectors (cover, type-1, type-2).
 //! - [`core`]: scenes, effects, the implicit DDA engine.
-//! - [`bench`]: scene generators and the built-in scenes.
+//! - [`bench`](mod@bench): scene generators and the built-in scenes.
 //!
 //! It also holds what the `dda` command writes ([`report`]).
 

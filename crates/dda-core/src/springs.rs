@@ -46,7 +46,7 @@ pub fn contact_points(c: &Contact, shapes: &[BlockShape]) -> (DVec2, DVec2, DVec
 }
 
 /// The normal distance of a vertex-edge contact after the step, to first order:
-/// d = (S0 + H^T D_i + G^T D_j) / l with S0 = det[[1,x1,y1],[1,x3,y3],[1,x2,y2]]
+/// d = (S0 + H^T D_i + G^T D_j) / l with S0 = `det[[1,x1,y1],[1,x3,y3],[1,x2,y2]]`
 /// (DESIGN 3; S0 / l is the paper's d_n, eq. 7). Its translational parts are equal and
 /// opposite, so the spring conserves momentum.
 pub fn normal_row(c: &Contact, shapes: &[BlockShape]) -> Row {

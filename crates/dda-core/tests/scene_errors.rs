@@ -1,0 +1,152 @@
+//! Bad scene input: every error names the file, the key path and the line, for TOML and
+//! JSON, whether the parser or the validation finds it.
+
+use dda_core::{Format, Scene, SceneError};
+
+const GOOD: &str = include_str!("../../../tests/scenes/sliding-block.toml");
+
+/// `GOOD` with the first line starting with `from` replaced by `to`.
+fn edit(from: &str, to: &str) -> String {
+    let mut done = false;
+    GOOD.lines()
+        .map(|l| {
+            if !done && l.starts_with(from) {
+                done = true;
+                to.to_string()
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// The 1-based line of `GOOD` starting with `from`.
+fn line_of(text: &str, from: &str) -> usize {
+    text.lines()
+        .position(|l| l.starts_with(from))
+        .expect("line present")
+        + 1
+}
+
+fn error(text: &str) -> SceneError {
+    match Scene::parse(text, Format::Toml, "scene.toml") {
+        Ok(_) => panic!("accepted a bad scene:\n{text}"),
+        Err(e) => e,
+    }
+}
+
+#[test]
+fn the_good_scene_parses() {
+    let (scene, model) = Scene::parse(GOOD, Format::Toml, "scene.toml").expect("valid");
+    assert_eq!(scene.name, "sliding-block");
+    assert_eq!(model.blocks.len(), 2);
+}
+
+#[test]
+fn unknown_key_is_named_with_its_line() {
+    let text = edit("time_step", "time_stpe = 0.001");
+    let e = error(&text);
+    assert_eq!(e.file, "scene.toml");
+    assert!(e.message.contains("time_stpe"), "{e}");
+    assert_eq!(e.line, Some(line_of(&text, "time_stpe")), "{e}");
+    assert!(e.key.starts_with("analysis"), "{e}");
+}
+
+#[test]
+fn wrong_type_is_named_with_key_and_line() {
+    let text = edit("duration", "duration = \"long\"");
+    let e = error(&text);
+    assert_eq!(e.key, "analysis.duration", "{e}");
+    assert_eq!(e.line, Some(line_of(&text, "duration")), "{e}");
+}
+
+#[test]
+fn invalid_values_are_named_with_key_and_line() {
+    let cases = [
+        ("duration", "duration = -1.0", "analysis.duration"),
+        (
+            "normal_penalty",
+            "normal_penalty = 0.0",
+            "analysis.normal_penalty",
+        ),
+        ("detector", "detector = \"magic\"", "analysis.detector"),
+        ("poisson", "poisson = 0.5", "materials.rock.poisson"),
+        (
+            "friction_deg",
+            "friction_deg = 95.0",
+            "joints.default.friction_deg",
+        ),
+        ("velocity", "velocity = [1.0, nan]", "blocks[1].velocity[1]"),
+    ];
+    for (from, to, key) in cases {
+        let text = edit(from, to);
+        let e = error(&text);
+        assert_eq!(e.key, key, "{e}");
+        assert_eq!(e.line, Some(line_of(&text, from)), "{e}");
+        let shown = e.to_string();
+        assert!(shown.starts_with("scene.toml:"), "{shown}");
+        assert!(shown.contains(key), "{shown}");
+    }
+}
+
+#[test]
+fn bad_block_geometry_names_the_vertex() {
+    // A reflex vertex (index 2) makes the slider non-convex.
+    let text = edit(
+        "vertices = [[0.0, 1.0]",
+        "vertices = [[0.0, 1.0], [1.0, 1.0], [0.5, 1.2], [1.0, 2.0], [0.0, 2.0]]",
+    );
+    let e = error(&text);
+    assert!(e.key.starts_with("blocks[1].vertices"), "{e}");
+    assert!(e.message.contains("slider"), "{e}");
+    assert_eq!(
+        e.line,
+        Some(line_of(&text, "vertices = [[0.0, 1.0]")),
+        "{e}"
+    );
+}
+
+#[test]
+fn missing_material_and_duplicate_id() {
+    let text = edit("material = \"rock\"", "material = \"granite\"");
+    let e = error(&text);
+    assert_eq!(e.key, "blocks[0].material", "{e}");
+    assert!(e.message.contains("granite"), "{e}");
+    let text = edit("id = \"slider\"", "id = \"base\"");
+    let e = error(&text);
+    assert_eq!(e.key, "blocks[1].id", "{e}");
+}
+
+#[test]
+fn syntax_error_has_a_line() {
+    let text = edit("gravity", "gravity = [0.0, -9.81");
+    let e = error(&text);
+    assert!(e.line.is_some(), "{e}");
+}
+
+#[test]
+fn json_errors_name_key_and_line() {
+    let json = r#"{
+  "name": "j",
+  "analysis": {
+    "duration": 1.0,
+    "time_step": 0.01,
+    "max_displacement": 0.01,
+    "normal_penalty": -5
+  },
+  "materials": {"rock": {"density": 2600, "young": 1e9, "poisson": 0.3}},
+  "blocks": [{"id": "a", "material": "rock", "vertices": [[0,0],[1,0],[1,1]]}]
+}"#;
+    let e = Scene::parse(json, Format::Json, "s.json").expect_err("invalid");
+    assert_eq!(e.key, "analysis.normal_penalty", "{e}");
+    assert_eq!(e.line, Some(7), "{e}");
+    let e = Scene::parse(
+        &json.replace("\"time_step\"", "\"timestep\""),
+        Format::Json,
+        "s.json",
+    )
+    .expect_err("unknown key");
+    assert!(e.message.contains("timestep"), "{e}");
+    assert_eq!(e.line, Some(5), "{e}");
+}
