@@ -7,7 +7,7 @@ use dda::contact::{
     BlockShape, ContactSet, DetectionParams, NeighbourPair, detect, detector_by_name,
     neighbour_pairs,
 };
-use dda::geom::{DVec2, JointSet, cut_by_joint_sets, shapes};
+use dda::geom::{DVec2, shapes};
 use std::hint::black_box;
 
 const DETECTORS: [&str; 3] = ["cover", "type-1", "type-2"];
@@ -23,23 +23,17 @@ fn ngon_pair(n: usize) -> Vec<BlockShape> {
     vec![BlockShape::new(&a), BlockShape::new(&b)]
 }
 
-/// The 10 m x 20 m column cut by joint sets at 60 and 15 degrees (830 blocks).
+/// The 10 m x 20 m column cut by joint sets at 60 and 15 degrees (830 blocks): the
+/// built-in `column-two-sets` without its base.
 fn column() -> Vec<BlockShape> {
-    let region = shapes::rectangle(DVec2::ZERO, DVec2::new(10.0, 20.0)).expect("rectangle");
-    let sets = [
-        JointSet {
-            dip_deg: 60.0,
-            spacing: 0.48,
-            offset: 0.13,
-        },
-        JointSet {
-            dip_deg: 15.0,
-            spacing: 0.4,
-            offset: 0.07,
-        },
-    ];
-    let cut = cut_by_joint_sets(&region, &sets, 1e-4).expect("joint sets");
-    cut.blocks.iter().map(BlockShape::new).collect()
+    let scene = dda::bench::builtin("column-two-sets").expect("built-in");
+    let model = scene.validate().expect("valid built-in");
+    model
+        .blocks
+        .iter()
+        .filter(|b| !b.fixed)
+        .map(|b| BlockShape::new(&b.polygon))
+        .collect()
 }
 
 fn bench_pairs(c: &mut Criterion) {
