@@ -667,9 +667,7 @@ impl Simulation {
             if !c.active {
                 continue;
             }
-            let j = *self
-                .model
-                .joint_between(c.key.vertex_block as usize, c.key.edge_block as usize);
+            let j = self.joint(k);
             let d = self.rows[k].eval(&self.d);
             let mut n = c;
             match c.state {
