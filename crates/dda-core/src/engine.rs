@@ -9,6 +9,11 @@
 //!   (or the tensile strength of a bonded contact), locked/sliding by Mohr-Coulomb; with
 //!   the cover detector, inactive covers the trial motion enters through become active
 //!   (paper eq. 12-13). It ends when nothing changes.
+//! - Solving: an attempt's first iteration assembles and factorises the system. Later
+//!   iterations differ from the factorised matrix only by the springs that opened or
+//!   closed since; while there are at most `MAX_RANK` of them, the iteration solves
+//!   through a low-rank update of that factor (Woodbury, `BlockSystem::solve_low_rank`)
+//!   and assembles only the right-hand side; beyond that it factorises anew.
 //! - Time-step control: if OCI has not converged in `max_oci` iterations the step is
 //!   redone with dt / 3; if the largest vertex displacement exceeds d_max or the largest
 //!   rotation exceeds theta_max, with dt scaled down in proportion. After an easy step
@@ -22,7 +27,7 @@ use crate::effects::Effects;
 use crate::kinematics::{Mat6, Vec6, along, elasticity, mass_matrix, point_displacement};
 use crate::scene::{JointProps, Mode, Model};
 use crate::springs::{Row, contact_length, contact_points, normal_row, shear_row};
-use crate::system::{BlockSystem, Entry, SolveError};
+use crate::system::{BlockSystem, Entry, RankOne, SolveError};
 use dda_contact::{
     BlockShape, ContactDetector, ContactSet, ContactState, DetectionParams, NeighbourPair,
     detector_by_name, neighbour_pairs,
@@ -154,6 +159,22 @@ impl Default for RunOptions {
 /// Floor of the time step, relative to the initial step: below it the run stops.
 const DT_FLOOR: f64 = 1e-9;
 
+/// Most springs that may differ from the factorised matrix before an OCI iteration
+/// assembles and factorises anew rather than solving through a low-rank update.
+const MAX_RANK: usize = 48;
+
+/// A spring in effect in an OCI iteration: its contact, whether it is the shear spring
+/// (else the normal one), its penalty, where it couples in the system, and its row.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Spring {
+    contact: u32,
+    shear: bool,
+    penalty: f64,
+    /// The system entry coupling its two blocks, if both are free.
+    entry: Option<Entry>,
+    row: Row,
+}
+
 /// A running simulation of a validated scene.
 pub struct Simulation {
     model: Model,
@@ -179,6 +200,10 @@ pub struct Simulation {
     block_pairs: Vec<(u32, u32)>,
     pair_entry: Vec<Option<Entry>>,
     rows: Vec<Row>,
+    springs: Vec<Spring>,
+    forces: Vec<(f64, Row)>,
+    factored_springs: Vec<Spring>,
+    changes: Vec<RankOne>,
     base_k: Vec<Mat6>,
     base_f: Vec<Vec6>,
     mass: Vec<Mat6>,
@@ -255,6 +280,10 @@ impl Simulation {
             block_pairs: Vec::new(),
             pair_entry: Vec::new(),
             rows: Vec::new(),
+            springs: Vec::new(),
+            forces: Vec::new(),
+            factored_springs: Vec::new(),
+            changes: Vec::new(),
             base_k: Vec::new(),
             base_f: Vec::new(),
             mass: Vec::new(),
@@ -312,9 +341,14 @@ impl Simulation {
         self.n_free * self.nd
     }
 
-    /// Number of symbolic and numeric factorisations so far.
-    pub fn factorisations(&self) -> (u64, u64) {
-        (self.system.symbolic_count, self.system.numeric_count)
+    /// Number of symbolic factorisations, numeric factorisations and low-rank solves so
+    /// far.
+    pub fn factorisations(&self) -> (u64, u64, u64) {
+        (
+            self.system.symbolic_count,
+            self.system.numeric_count,
+            self.system.low_rank_count,
+        )
     }
 
     /// Runs to the scene's duration, calling `on_step` after every step.
@@ -476,6 +510,8 @@ impl Simulation {
         let nb = self.blocks.len();
         let eff = self.effects;
         let p = &self.model.params;
+        // New base terms: the factor of the previous matrix no longer applies.
+        self.system.clear();
         self.base_k.clear();
         self.base_f.clear();
         self.mass.clear();
@@ -550,13 +586,12 @@ impl Simulation {
             .joint_between(key.vertex_block as usize, key.edge_block as usize)
     }
 
-    /// Assembles K and F for the current contact states.
-    fn assemble(&mut self) {
-        self.system.clear();
-        for (f, (k, rhs)) in self.base_k.iter().zip(&self.base_f).enumerate() {
-            self.system.add_diagonal(f as u32, k);
-            self.system.add_rhs(f as u32, 1.0, rhs);
-        }
+    /// Collects the springs and friction forces of the current contact states: the active
+    /// closed contacts' normal springs, and, where the joint has shear, locked contacts'
+    /// shear springs and sliding contacts' friction forces.
+    fn collect_springs(&mut self) {
+        self.springs.clear();
+        self.forces.clear();
         let p = &self.model.params;
         let (pn, ps) = (p.normal_penalty, p.shear_penalty);
         for (pk, pc) in self.contacts.pairs.iter().enumerate() {
@@ -566,7 +601,14 @@ impl Simulation {
                 if !(c.active && c.state.is_closed()) {
                     continue;
                 }
-                add_spring(&mut self.system, &self.free, entry, pn, &self.rows[k]);
+                let contact = k as u32;
+                self.springs.push(Spring {
+                    contact,
+                    shear: false,
+                    penalty: pn,
+                    entry,
+                    row: self.rows[k],
+                });
                 self.totals.normal_springs += 1;
                 let j = self.joint(k);
                 if !j.has_shear() {
@@ -575,7 +617,13 @@ impl Simulation {
                 match c.state {
                     ContactState::Locked => {
                         let row = shear_row(&c, &self.shapes, c.locked_r);
-                        add_spring(&mut self.system, &self.free, entry, ps, &row);
+                        self.springs.push(Spring {
+                            contact,
+                            shear: true,
+                            penalty: ps,
+                            entry,
+                            row,
+                        });
                         self.totals.shear_springs += 1;
                     }
                     ContactState::Sliding if c.slide_dir != 0.0 => {
@@ -584,7 +632,7 @@ impl Simulation {
                             limit += j.cohesion * contact_length(&c, &self.shapes);
                         }
                         let row = shear_row(&c, &self.shapes, c.r.clamp(0.0, 1.0));
-                        add_force(&mut self.system, &self.free, -c.slide_dir * limit, &row);
+                        self.forces.push((-c.slide_dir * limit, row));
                         self.totals.friction_forces += 1;
                     }
                     _ => {}
@@ -593,21 +641,125 @@ impl Simulation {
         }
     }
 
+    /// Adds the right-hand side of the base terms, the springs and the forces.
+    fn assemble_rhs(&mut self) {
+        for (f, rhs) in self.base_f.iter().enumerate() {
+            self.system.add_rhs(f as u32, 1.0, rhs);
+        }
+        for s in &self.springs {
+            for (b, c) in s.row.blocks.iter().zip(&s.row.c) {
+                if let Some(f) = self.free[*b as usize] {
+                    self.system.add_rhs(f, -s.penalty * s.row.g0, c);
+                }
+            }
+        }
+        for (f, row) in &self.forces {
+            for (b, c) in row.blocks.iter().zip(&row.c) {
+                if let Some(fi) = self.free[*b as usize] {
+                    self.system.add_rhs(fi, *f, c);
+                }
+            }
+        }
+    }
+
+    /// Assembles K (base terms and springs) and F, and factorises and solves.
+    fn assemble_and_factorise(&mut self, rec: &mut StepRecord) -> Result<(), SimError> {
+        let t0 = Instant::now();
+        self.system.clear();
+        for (f, k) in self.base_k.iter().enumerate() {
+            self.system.add_diagonal(f as u32, k);
+        }
+        for s in &self.springs {
+            add_spring(&mut self.system, &self.free, s.entry, s.penalty, &s.row);
+        }
+        self.assemble_rhs();
+        let t1 = Instant::now();
+        rec.assembly_s += (t1 - t0).as_secs_f64();
+        self.system
+            .solve()
+            .map_err(|source| SimError::Solve { t: self.t, source })?;
+        rec.solve_s += t1.elapsed().as_secs_f64();
+        self.factored_springs.clone_from(&self.springs);
+        Ok(())
+    }
+
+    /// The difference between the springs in effect and those in the factorised matrix,
+    /// as rank-one terms (both lists are in contact order); None if it has more than
+    /// [`MAX_RANK`] terms.
+    fn spring_changes(&mut self) -> Option<()> {
+        self.changes.clear();
+        let (now, then) = (&self.springs, &self.factored_springs);
+        let (mut i, mut j) = (0, 0);
+        let free = &self.free;
+        let term = |s: &Spring, sign: f64| RankOne {
+            blocks: [
+                free[s.row.blocks[0] as usize],
+                free[s.row.blocks[1] as usize],
+            ],
+            c: s.row.c,
+            s: sign * s.penalty,
+        };
+        while i < now.len() || j < then.len() {
+            let key = |s: &Spring| (s.contact, s.shear);
+            match (now.get(i), then.get(j)) {
+                (Some(a), Some(b)) if key(a) == key(b) => {
+                    if a.row.c != b.row.c || a.penalty != b.penalty {
+                        self.changes.push(term(a, 1.0));
+                        self.changes.push(term(b, -1.0));
+                    }
+                    i += 1;
+                    j += 1;
+                }
+                (Some(a), Some(b)) if key(a) < key(b) => {
+                    self.changes.push(term(a, 1.0));
+                    i += 1;
+                }
+                (Some(a), None) => {
+                    self.changes.push(term(a, 1.0));
+                    i += 1;
+                }
+                (_, Some(b)) => {
+                    self.changes.push(term(b, -1.0));
+                    j += 1;
+                }
+                (None, None) => break,
+            }
+            if self.changes.len() > MAX_RANK {
+                return None;
+            }
+        }
+        Some(())
+    }
+
+    /// Solves for the current contact states: through the factor already computed when
+    /// few springs changed since, otherwise by assembling and factorising anew.
+    fn solve_states(&mut self, rec: &mut StepRecord) -> Result<(), SimError> {
+        let t0 = Instant::now();
+        self.collect_springs();
+        if self.system.is_factored() && self.spring_changes().is_some() {
+            self.system.clear_rhs();
+            self.assemble_rhs();
+            let t1 = Instant::now();
+            rec.assembly_s += (t1 - t0).as_secs_f64();
+            let solved = self.system.solve_low_rank(&self.changes);
+            rec.solve_s += t1.elapsed().as_secs_f64();
+            if solved {
+                return Ok(());
+            }
+        } else {
+            rec.assembly_s += t0.elapsed().as_secs_f64();
+        }
+        self.assemble_and_factorise(rec)
+    }
+
     /// Open-close iteration at step size `dt` (base terms already built). Returns whether
     /// it converged and how many iterations it took.
     fn open_close_iteration(&mut self, rec: &mut StepRecord) -> Result<(bool, u32), SimError> {
         let max_oci = self.model.params.max_oci;
         for it in 1..=max_oci {
-            let t0 = Instant::now();
-            self.assemble();
-            let t1 = Instant::now();
-            rec.assembly_s += (t1 - t0).as_secs_f64();
-            self.system
-                .solve()
-                .map_err(|source| SimError::Solve { t: self.t, source })?;
-            self.gather_solution();
+            self.solve_states(rec)?;
             let t2 = Instant::now();
-            rec.solve_s += (t2 - t1).as_secs_f64();
+            self.gather_solution();
             let mut changed = self.update_states();
             rec.assembly_s += t2.elapsed().as_secs_f64();
             let t3 = Instant::now();
@@ -857,7 +1009,8 @@ impl Simulation {
     }
 }
 
-/// Adds the spring p q^2 / 2 of `row` to the system (fixed blocks contribute nothing).
+/// Adds the stiffness of the spring p q^2 / 2 of `row` to the matrix (fixed blocks
+/// contribute nothing); its right-hand side comes with [`Simulation::assemble_rhs`].
 fn add_spring(
     sys: &mut BlockSystem,
     free: &[Option<u32>],
@@ -870,19 +1023,9 @@ fn add_spring(
     for (f, c) in [(fa, &row.c[0]), (fb, &row.c[1])] {
         if let Some(f) = f {
             sys.add_outer(sys.diagonal(f), f, f, p, c, c);
-            sys.add_rhs(f, -p * row.g0, c);
         }
     }
     if let (Some(a), Some(b), Some(e)) = (fa, fb, pair_entry) {
         sys.add_outer(e, a, b, p, &row.c[0], &row.c[1]);
-    }
-}
-
-/// Adds a force of magnitude `f` along the measure of `row` to both blocks.
-fn add_force(sys: &mut BlockSystem, free: &[Option<u32>], f: f64, row: &Row) {
-    for (b, c) in row.blocks.iter().zip(&row.c) {
-        if let Some(fi) = free[*b as usize] {
-            sys.add_rhs(fi, f, c);
-        }
     }
 }

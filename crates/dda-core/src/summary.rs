@@ -64,6 +64,8 @@ pub struct Summary {
     pub symbolic_factorisations: u64,
     /// Numeric factorisations.
     pub numeric_factorisations: u64,
+    /// OCI solves done through a low-rank update of the last factor instead.
+    pub low_rank_solves: u64,
     /// Wall-clock seconds.
     pub seconds: Seconds,
     /// Largest penetration after any step, m.
@@ -76,7 +78,7 @@ impl Summary {
     /// The summary of `sim` as it stands; `error` if the run stopped early.
     pub fn of(sim: &Simulation, error: Option<String>) -> Self {
         let t = sim.totals();
-        let (sym, num) = sim.factorisations();
+        let (sym, num, low_rank) = sim.factorisations();
         let p = &sim.model().params;
         Summary {
             scene: sim.model().name.clone(),
@@ -104,6 +106,7 @@ impl Summary {
             shear_springs: t.shear_springs,
             symbolic_factorisations: sym,
             numeric_factorisations: num,
+            low_rank_solves: low_rank,
             seconds: Seconds {
                 total: t.total_s,
                 contact_detection: t.detection_s,

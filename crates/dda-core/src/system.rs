@@ -69,10 +69,23 @@ pub struct BlockSystem {
     symbolic: Option<SymbolicCholesky<usize>>,
     l_values: Vec<f64>,
     mem: MemBuffer,
+    /// Whether `l_values` holds the factor of `values`.
+    factored: bool,
+    /// Low-rank solves: K^-1 u for every u solved since the factorisation (column-major,
+    /// n per column), and each column's u.
+    z: Vec<f64>,
+    z_rows: Vec<([Option<u32>; 2], [Vec6; 2])>,
+    /// Per term of the current low-rank solve: its column in `z`.
+    term_col: Vec<usize>,
+    /// The capacitance matrix (row-major) and its right-hand side, then solution.
+    cap: Vec<f64>,
+    cap_rhs: Vec<f64>,
     /// Number of symbolic factorisations done.
     pub symbolic_count: u64,
     /// Number of numeric factorisations done.
     pub numeric_count: u64,
+    /// Number of solves through a low-rank update of the factor.
+    pub low_rank_count: u64,
 }
 
 impl std::fmt::Debug for BlockSystem {
@@ -104,8 +117,15 @@ impl Default for BlockSystem {
             symbolic: None,
             l_values: Vec::new(),
             mem: MemBuffer::new(StackReq::EMPTY),
+            factored: false,
+            z: Vec::new(),
+            z_rows: Vec::new(),
+            term_col: Vec::new(),
+            cap: Vec::new(),
+            cap_rhs: Vec::new(),
             symbolic_count: 0,
             numeric_count: 0,
+            low_rank_count: 0,
         }
     }
 }
@@ -132,6 +152,7 @@ impl BlockSystem {
         if self.symbolic.is_some() && self.nb == nb && self.nd == nd && self.pairs == pairs {
             return Ok(false);
         }
+        self.factored = false;
         self.nb = nb;
         self.nd = nd;
         self.pairs.clear();
@@ -257,7 +278,19 @@ impl BlockSystem {
 
     /// Zeroes the matrix values and the right-hand side, keeping the pattern.
     pub fn clear(&mut self) {
+        self.factored = false;
         self.values.fill(0.0);
+        self.rhs.fill(0.0);
+    }
+
+    /// Whether the matrix is factorised as it stands (no entry added since the last
+    /// [`BlockSystem::solve`]).
+    pub fn is_factored(&self) -> bool {
+        self.factored
+    }
+
+    /// Zeroes the right-hand side only, keeping the matrix and its factor.
+    pub fn clear_rhs(&mut self) {
         self.rhs.fill(0.0);
     }
 
@@ -280,6 +313,7 @@ impl BlockSystem {
     /// Adds the symmetric block `k` (only its upper triangle is read) to the diagonal
     /// entry of block `i`.
     pub fn add_diagonal(&mut self, i: u32, k: &Mat6) {
+        self.factored = false;
         let nd = self.nd;
         let e = self.diagonal(i).0 as usize;
         for q in 0..nd {
@@ -294,6 +328,7 @@ impl BlockSystem {
     /// `v`) at `entry`, and its transpose to the coupling of `j` and `i`; on a diagonal
     /// entry (`i == j`) `u == v` is assumed and the term is added once.
     pub fn add_outer(&mut self, entry: Entry, i: u32, j: u32, s: f64, u: &Vec6, v: &Vec6) {
+        self.factored = false;
         let nd = self.nd;
         let e = entry.0 as usize;
         if self.entry_diag[e] {
@@ -363,11 +398,162 @@ impl BlockSystem {
             )
             .map_err(|_| SolveError::NotPositiveDefinite)?;
         self.numeric_count += 1;
+        self.factored = true;
+        self.z.clear();
+        self.z_rows.clear();
         let llt = LltRef::new(symbolic, &self.l_values);
         let rhs = MatMut::from_column_major_slice_mut(&mut self.rhs, n, 1);
         llt.solve_in_place_with_conj(Conj::No, rhs, PAR, MemStack::new(&mut self.mem));
         Ok(())
     }
+
+    /// Solves (K + sum s u u^T) x = F with the factor of K from the last
+    /// [`BlockSystem::solve`], by the Woodbury identity, for a right-hand side assembled
+    /// since with [`BlockSystem::clear_rhs`] and [`BlockSystem::add_rhs`]:
+    /// x = y - Z C^-1 U^T y with y = K^-1 F, Z = K^-1 U, C = S^-1 + U^T Z.
+    ///
+    /// Each Z column is solved once per factorisation and kept, so a term that stays in
+    /// the list from one call to the next costs nothing more. Returns false, leaving the
+    /// right-hand side untouched, when there is no valid factor or C is numerically
+    /// singular: the caller then assembles and factorises.
+    pub fn solve_low_rank(&mut self, terms: &[RankOne]) -> bool {
+        let n = self.nb * self.nd;
+        let Some(symbolic) = self.symbolic.as_ref() else {
+            return false;
+        };
+        if !self.factored || terms.iter().any(|t| t.s == 0.0 || !t.s.is_finite()) {
+            return false;
+        }
+        if n == 0 {
+            return true;
+        }
+        // Columns of Z: reuse those already solved, solve the new ones together.
+        let first_new = self.z_rows.len();
+        self.term_col.clear();
+        for t in terms {
+            let key = (t.blocks, t.c);
+            let col = match self.z_rows.iter().position(|r| *r == key) {
+                Some(col) => col,
+                None => {
+                    self.z_rows.push(key);
+                    self.z.resize(self.z_rows.len() * n, 0.0);
+                    let col = self.z_rows.len() - 1;
+                    let (pos, nd) = (&self.pos, self.nd);
+                    let zc = &mut self.z[col * n..(col + 1) * n];
+                    for (b, c) in t.blocks.iter().zip(&t.c) {
+                        if let Some(b) = b {
+                            let p = pos[*b as usize] as usize * nd;
+                            for (a, v) in zc[p..p + nd].iter_mut().enumerate() {
+                                *v += c[a];
+                            }
+                        }
+                    }
+                    col
+                }
+            };
+            self.term_col.push(col);
+        }
+        let added = self.z_rows.len() - first_new;
+        let req = symbolic.solve_in_place_scratch::<f64>(added.max(1), PAR);
+        if req.size_bytes() > self.mem.len() {
+            self.mem = MemBuffer::new(req);
+        }
+        let llt = LltRef::new(symbolic, &self.l_values);
+        if added > 0 {
+            let cols = MatMut::from_column_major_slice_mut(&mut self.z[first_new * n..], n, added);
+            llt.solve_in_place_with_conj(Conj::No, cols, PAR, MemStack::new(&mut self.mem));
+        }
+        let y = MatMut::from_column_major_slice_mut(&mut self.rhs, n, 1);
+        llt.solve_in_place_with_conj(Conj::No, y, PAR, MemStack::new(&mut self.mem));
+
+        // C = S^-1 + U^T Z and U^T y.
+        let k = terms.len();
+        self.cap.clear();
+        self.cap.resize(k * k, 0.0);
+        self.cap_rhs.clear();
+        for (i, t) in terms.iter().enumerate() {
+            for (j, &col) in self.term_col.iter().enumerate() {
+                self.cap[i * k + j] = self.row_dot(t, &self.z[col * n..(col + 1) * n]);
+            }
+            self.cap[i * k + i] += 1.0 / t.s;
+            self.cap_rhs.push(self.row_dot(t, &self.rhs));
+        }
+        if !lu_solve_in_place(&mut self.cap, &mut self.cap_rhs, k) {
+            return false;
+        }
+        for (&col, &w) in self.term_col.iter().zip(&self.cap_rhs) {
+            for (x, z) in self.rhs.iter_mut().zip(&self.z[col * n..(col + 1) * n]) {
+                *x -= w * z;
+            }
+        }
+        self.low_rank_count += 1;
+        true
+    }
+
+    /// u . v for a term's row u and a vector v in permuted order.
+    fn row_dot(&self, t: &RankOne, v: &[f64]) -> f64 {
+        let nd = self.nd;
+        let mut s = 0.0;
+        for (b, c) in t.blocks.iter().zip(&t.c) {
+            if let Some(b) = b {
+                let p = self.pos[*b as usize] as usize * nd;
+                s += (0..nd).map(|a| c[a] * v[p + a]).sum::<f64>();
+            }
+        }
+        s
+    }
+}
+
+/// A symmetric rank-one change `s u u^T` of the factorised matrix, `u` a row over the
+/// unknowns of (up to) two free blocks: a spring added (s > 0) or removed (s < 0) since the
+/// factorisation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RankOne {
+    /// The free blocks the row touches (`None`: a fixed block, which has no unknowns).
+    pub blocks: [Option<u32>; 2],
+    /// Coefficients over each block's unknowns.
+    pub c: [Vec6; 2],
+    /// Stiffness of the change.
+    pub s: f64,
+}
+
+/// Solves the dense `k x k` system `a x = b` (row-major `a`, overwritten) by LU with
+/// partial pivoting, leaving x in `b`; false if a pivot vanishes.
+fn lu_solve_in_place(a: &mut [f64], b: &mut [f64], k: usize) -> bool {
+    let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for col in 0..k {
+        let mut piv = col;
+        for r in col + 1..k {
+            if a[r * k + col].abs() > a[piv * k + col].abs() {
+                piv = r;
+            }
+        }
+        let pv = a[piv * k + col];
+        // A NaN pivot fails too.
+        if pv.abs() <= f64::EPSILON * scale || pv.is_nan() {
+            return false;
+        }
+        if piv != col {
+            for c in 0..k {
+                a.swap(piv * k + c, col * k + c);
+            }
+            b.swap(piv, col);
+        }
+        for r in col + 1..k {
+            let f = a[r * k + col] / pv;
+            if f != 0.0 {
+                for c in col + 1..k {
+                    a[r * k + c] -= f * a[col * k + c];
+                }
+                b[r] -= f * b[col];
+            }
+        }
+    }
+    for col in (0..k).rev() {
+        let s: f64 = (col + 1..k).map(|c| a[col * k + c] * b[c]).sum();
+        b[col] = (b[col] - s) / a[col * k + col];
+    }
+    true
 }
 
 /// The transpose of a CSC pattern (row indices sorted in each column).
@@ -396,6 +582,93 @@ mod tests {
 
     /// A 4-block system (a star around block 0, which the ordering moves last) solved by
     /// the block system has a dense residual at rounding level.
+    /// A pseudo-random generator for test values in [-0.5, 0.5).
+    fn rng(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        }
+    }
+
+    /// Low-rank solves after a factorisation satisfy the changed system to rounding: a
+    /// spring added between two blocks, one to a fixed block (one side only), one removed,
+    /// over two successive calls that share terms (the second reuses solved columns).
+    #[test]
+    fn low_rank_solve_matches_changed_matrix() {
+        let (nb, nd) = (5usize, 6usize);
+        let n = nb * nd;
+        let pairs = [(0u32, 1u32), (0, 4), (1, 2), (2, 3), (3, 4)];
+        let mut sys = BlockSystem::new();
+        sys.set_pattern(nb, nd, &pairs).unwrap();
+        sys.clear();
+        let mut rnd = rng(7);
+        let mut dense = vec![vec![0.0; n]; n];
+        for i in 0..nb {
+            let mut k = [[0.0; 6]; 6];
+            for a in 0..nd {
+                for b in a..nd {
+                    let v = if a == b { 10.0 } else { 0.5 * rnd() };
+                    k[a][b] = v;
+                    dense[i * nd + a][i * nd + b] = v;
+                    dense[i * nd + b][i * nd + a] = v;
+                }
+            }
+            sys.add_diagonal(i as u32, &k);
+        }
+        let f: Vec<f64> = (0..n).map(|_| rnd()).collect();
+        let add_rhs = |sys: &mut BlockSystem| {
+            for i in 0..nb {
+                let fi: Vec6 = std::array::from_fn(|a| f[i * nd + a]);
+                sys.add_rhs(i as u32, 1.0, &fi);
+            }
+        };
+        add_rhs(&mut sys);
+        sys.solve().unwrap();
+        let mut row = |blocks: [Option<u32>; 2], s: f64| RankOne {
+            blocks,
+            c: [
+                std::array::from_fn(|_| rnd()),
+                std::array::from_fn(|_| rnd()),
+            ],
+            s,
+        };
+        let spring = row([Some(1), Some(2)], 30.0);
+        let to_fixed = row([Some(3), None], 50.0);
+        let removed = row([Some(0), Some(4)], -1.0);
+        for terms in [vec![spring, to_fixed], vec![spring, removed, to_fixed]] {
+            sys.clear_rhs();
+            add_rhs(&mut sys);
+            assert!(sys.solve_low_rank(&terms));
+            let mut m = dense.clone();
+            for t in &terms {
+                let mut u = vec![0.0; n];
+                for (b, c) in t.blocks.iter().zip(&t.c) {
+                    if let Some(b) = b {
+                        u[*b as usize * nd..(*b as usize + 1) * nd].copy_from_slice(c);
+                    }
+                }
+                for r in 0..n {
+                    for c in 0..n {
+                        m[r][c] += t.s * u[r] * u[c];
+                    }
+                }
+            }
+            let x: Vec<f64> = (0..nb as u32)
+                .flat_map(|i| sys.solution(i).to_vec())
+                .collect();
+            for r in 0..n {
+                let res: f64 = (0..n).map(|c| m[r][c] * x[c]).sum::<f64>() - f[r];
+                assert!(res.abs() < 1e-12, "row {r}: residual {res}");
+            }
+        }
+        assert_eq!(sys.low_rank_count, 2);
+        // A change of the matrix drops the factor: the low-rank path declines.
+        sys.add_diagonal(0, &[[1.0; 6]; 6]);
+        assert!(!sys.solve_low_rank(&[spring]));
+    }
+
     #[test]
     fn block_system_solves_like_dense() {
         for nd in [3usize, 6] {
@@ -407,13 +680,7 @@ mod tests {
             sys.clear();
             let n = nb * nd;
             let mut dense = vec![vec![0.0; n]; n];
-            let mut seed = 1u64;
-            let mut rnd = || {
-                seed = seed
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-            };
+            let mut rnd = rng(1);
             for i in 0..nb {
                 let mut k = [[0.0; 6]; 6];
                 for a in 0..nd {
