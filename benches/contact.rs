@@ -23,10 +23,10 @@ fn ngon_pair(n: usize) -> Vec<BlockShape> {
     vec![BlockShape::new(&a), BlockShape::new(&b)]
 }
 
-/// The 10 m x 20 m column cut by joint sets at 60 and 15 degrees (830 blocks): the
-/// built-in `column-two-sets` without its base.
+/// The 10 m x 20 m column cut by joint sets at 60 and 15 degrees (826 blocks): the
+/// built-in `paper-5.2b-column-826` without its base.
 fn column() -> Vec<BlockShape> {
-    let scene = dda::bench::builtin("column-two-sets").expect("built-in");
+    let scene = dda::bench::builtin("paper-5.2b-column-826").expect("built-in");
     let model = scene.validate().expect("valid built-in");
     model
         .blocks

@@ -1,4 +1,4 @@
-//! One DDA step of the ~830-block jointed column (built-in `column-two-sets`), whole and
+//! One DDA step of the 826-block jointed column (built-in `paper-5.2b-column-826`), whole and
 //! broken into its phases: contact detection, assembly, numeric factorisation + solve.
 //!
 //! - `column_step/step`: `Simulation::step` on a running column (each iteration is the
@@ -7,16 +7,17 @@
 //! - `column_step/detect`: step-start detection over every neighbour pair (cover).
 //! - `column_step/factorise_solve`: numeric Cholesky + solve of the global matrix on the
 //!   column's own block pattern (6 DOF per block), the symbolic analysis done once.
+//! - `column_step/low_rank_solve/k`: a solve through a rank-k update of that factor.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use dda::contact::{BlockShape, ContactSet, DetectionParams, detect, neighbour_pairs};
 use dda::core::kinematics::Vec6;
-use dda::core::{BlockSystem, RunOptions, Simulation, StepRecord};
+use dda::core::{BlockSystem, RankOne, RunOptions, Simulation, StepRecord};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 fn column() -> Simulation {
-    let scene = dda::bench::builtin("column-two-sets").expect("built-in");
+    let scene = dda::bench::builtin("paper-5.2b-column-826").expect("built-in");
     let model = scene.validate().expect("valid");
     Simulation::new(model, RunOptions::default())
 }
@@ -124,6 +125,39 @@ fn bench_step(c: &mut Criterion) {
             criterion::BatchSize::LargeInput,
         )
     });
+    // Solves through a low-rank update of that factor, k springs changed (all new
+    // columns: the cost of the first low-rank solve after a factorisation).
+    for k in [1usize, 8, 32, 96] {
+        let terms: Vec<RankOne> = block_pairs
+            .iter()
+            .step_by(block_pairs.len() / k)
+            .take(k)
+            .map(|&(i, j)| RankOne {
+                blocks: [Some(i), Some(j)],
+                c: [
+                    [1.0, 0.5, 0.2, 0.1, 0.0, 0.1],
+                    [-1.0, -0.5, 0.3, 0.0, 0.1, 0.0],
+                ],
+                s: 3e9,
+            })
+            .collect();
+        group.bench_function(format!("low_rank_solve/{k}"), |b| {
+            b.iter_batched_ref(
+                || {
+                    let mut sys = build();
+                    sys.solve().expect("solve");
+                    sys
+                },
+                |sys| {
+                    sys.clear_rhs();
+                    sys.add_rhs(0, 1.0, &[1.0; 6]);
+                    assert!(sys.solve_low_rank(&terms));
+                    black_box(sys.solution(0)[0])
+                },
+                criterion::BatchSize::LargeInput,
+            )
+        });
+    }
     group.finish();
 }
 

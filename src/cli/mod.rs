@@ -49,13 +49,18 @@ pub fn main() -> ExitCode {
         Command::Run(args) => run::run(args),
         Command::Check { scene } => check(&scene),
         Command::Scenes => {
+            let width = dda_bench::BUILTINS
+                .iter()
+                .map(|b| b.name.len())
+                .max()
+                .unwrap_or(0);
             for b in dda_bench::BUILTINS {
                 let mark = if b.name == dda_bench::DEFAULT_BUILTIN {
-                    " (default)"
+                    " [default]"
                 } else {
                     ""
                 };
-                println!("{}{mark}\n    {}", b.name, b.description);
+                println!("{:<width$}  {}{mark}", b.name, b.description);
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -118,18 +123,24 @@ fn check(name: &str) -> Result<ExitCode, BadInput> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// The default output directory of a scene.
+/// The default output directory of a scene: `runs/` and its name, with characters other
+/// than letters, digits, '-', '_' and '.' replaced by '_'.
 pub fn default_out(scene: &Scene) -> PathBuf {
     let safe: String = scene
         .name
         .chars()
         .map(|c| {
-            if c.is_alphanumeric() || c == '-' || c == '_' {
+            if c.is_alphanumeric() || c == '-' || c == '_' || c == '.' {
                 c
             } else {
                 '_'
             }
         })
         .collect();
+    // No hidden or parent directory (staging directories start with '.').
+    let safe = match safe.strip_prefix('.') {
+        Some(rest) => format!("_{rest}"),
+        None => safe,
+    };
     Path::new("runs").join(safe)
 }

@@ -2,7 +2,7 @@
 //! fixed base, under gravity.
 
 use dda_core::Scene;
-use dda_core::scene::{Analysis, BlockSpec, Joint, Material, Mode, Plane};
+use dda_core::scene::{Analysis, BlockSpec, Joint, Material};
 use dda_geom::{
     ConvexPolygon, DVec2, JointSet, JointSetError, PolygonError, cut_by_joint_sets, shapes,
 };
@@ -99,27 +99,5 @@ pub fn column_scene(name: &str, blocks: &[ConvexPolygon], analysis: Analysis) ->
         )]),
         joints: BTreeMap::from([("default".into(), Joint::default())]),
         blocks: specs,
-    }
-}
-
-/// Analysis settings of a column run: dynamic, 1 s, gravity 9.8 m/s^2, theta_max 2 deg,
-/// d_tol = 2 d_max (paper section 2.6).
-pub fn column_analysis(time_step: f64, d_max: f64, penalty: f64) -> Analysis {
-    Analysis {
-        mode: Mode::Dynamic,
-        duration: 1.0,
-        time_step,
-        max_displacement: d_max,
-        max_rotation_deg: 2.0,
-        contact_tolerance: Some(2.0 * d_max),
-        normal_penalty: penalty,
-        shear_penalty: None,
-        fixed_penalty: None,
-        detector: "cover".into(),
-        gravity: Some([0.0, -9.8]),
-        deformable: true,
-        plane: Plane::Stress,
-        max_oci: 6,
-        frames: 10,
     }
 }

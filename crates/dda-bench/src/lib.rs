@@ -1,8 +1,11 @@
-//! Scene generators for dda-rs: jointed columns cut with `dda-geom`, and the built-in
-//! scenes the `dda` command runs without a file.
+//! Scene generators for dda-rs: jointed columns cut with `dda-geom`, the paper's section 5
+//! columns, and the built-in scenes the `dda` command runs without a file.
 
 pub mod builtin;
 pub mod column;
+pub mod layout;
+pub mod paper;
 
 pub use self::builtin::{BUILTINS, Builtin, DEFAULT_BUILTIN, builtin};
-pub use self::column::{ColumnError, ColumnSpec, column_analysis, column_scene, jointed_column};
+pub use self::column::{ColumnError, ColumnSpec, column_scene, jointed_column};
+pub use self::paper::{PAPER_COLUMNS, PaperColumn};

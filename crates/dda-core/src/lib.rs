@@ -23,4 +23,4 @@ pub use self::engine::{BlockState, RunOptions, SimError, Simulation, StepRecord,
 pub use self::locate::LineIndex;
 pub use self::scene::{Format, Invalid, Model, Scene, SceneError};
 pub use self::summary::{BlockSummary, Seconds, Summary};
-pub use self::system::{BlockSystem, SolveError};
+pub use self::system::{BlockSystem, RankOne, SolveError};

@@ -17,7 +17,7 @@ mod polygon;
 pub mod shapes;
 
 pub use self::aabb::Aabb;
-pub use self::cut::{Cutting, JointSet, Line, Split, cut_by_joint_sets, split};
+pub use self::cut::{Cutting, JointSet, Line, Split, cut_by_joint_sets, cut_by_lines, split};
 pub use self::entrance::{
     CoverSource, EntranceBlock, EntranceFace, SignedDistance, d_re, d_re1, for_each_face,
     signed_distance,
