@@ -144,9 +144,15 @@ impl ContactSet {
 
     /// The contact with `key`, if it is a candidate.
     pub fn find(&self, key: &ContactKey) -> Option<&Contact> {
-        let pair = key.pair();
-        let k = self.pairs.binary_search_by(|p| p.pair.cmp(&pair)).ok()?;
-        self.of_pair(k).iter().find(|c| c.key == *key)
+        self.with_pair(key.pair()).iter().find(|c| c.key == *key)
+    }
+
+    /// The candidates of a neighbour pair (sorted by key; empty if it has none).
+    pub fn with_pair(&self, pair: NeighbourPair) -> &[Contact] {
+        match self.pairs.binary_search_by(|p| p.pair.cmp(&pair)) {
+            Ok(k) => self.of_pair(k),
+            Err(_) => &[],
+        }
     }
 
     /// Active contacts.

@@ -313,7 +313,13 @@ mod tests {
         // (edge 2) at x = 1.075, on the edge, and in A's frame B's corner crosses the line
         // of A's bottom edge (edge 0) at x = 0.975, on that edge: both covers activate,
         // while the covers through the side edges (crossed beyond their ends) do not.
-        let trial = [[0.12, -0.08, 0.0, 0.0, 0.0, 0.0], [0.0; 6]];
+        let motions = |d: [[f64; 6]; 2]| {
+            [
+                dda_geom::Motion::new(shapes[0].centroid, &d[0]),
+                dda_geom::Motion::new(shapes[1].centroid, &d[1]),
+            ]
+        };
+        let trial = motions([[0.12, -0.08, 0.0, 0.0, 0.0, 0.0], [0.0; 6]]);
         let mut moved = set.clone();
         assert_eq!(track(&CoverDetector, &shapes, &trial, &mut moved), 2);
         let act: Vec<_> = moved.active().map(|c| tuple(c.key)).collect();
@@ -324,7 +330,7 @@ mod tests {
                 .all(|c| c.state == crate::ContactState::Locked)
         );
         // Moving sideways only, nothing enters.
-        let trial = [[0.1, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0; 6]];
+        let trial = motions([[0.1, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0; 6]]);
         let mut side = set.clone();
         assert_eq!(track(&CoverDetector, &shapes, &trial, &mut side), 0);
     }

@@ -7,7 +7,7 @@ use crate::cover::CoverDetector;
 use crate::neighbour::NeighbourPair;
 use crate::shape::BlockShape;
 use crate::territory::TerritoryDetector;
-use dda_geom::{DVec2, VertexEdge, displace_point};
+use dda_geom::{DVec2, Motion, VertexEdge};
 use std::fmt;
 
 /// Tolerances of detection (paper section 2.6).
@@ -124,8 +124,14 @@ fn detect_range(
         mine.sort_unstable_by_key(|c| c.key);
         // Inherit the closed state (locked or sliding), the locked point and the cohesion
         // of the same vertex-edge pair at the end of the previous step (paper 2.3.1).
+        let before = previous.with_pair(pair);
+        let mut j = 0;
         for c in mine.iter_mut() {
-            if let Some(old) = previous.find(&c.key) {
+            // Both lists are sorted by key: walk them together.
+            while j < before.len() && before[j].key < c.key {
+                j += 1;
+            }
+            if let Some(old) = before.get(j).filter(|o| o.key == c.key) {
                 c.bonded = old.bonded;
                 if old.active && old.state.is_closed() {
                     c.state = old.state;
@@ -204,22 +210,19 @@ pub fn detect(
 }
 
 /// Open-close iteration update of activity: every inactive candidate is measured at the
-/// trial positions (blocks moved by `trial[i]` = (u0, v0, r0, ex, ey, gxy) about their
-/// centroids, rotation exact) and activated, closed and locked where its trajectory
+/// trial positions (block i moved by `trial[i]`, its motion about its centroid, rotation
+/// exact) and activated, closed and locked where its trajectory
 /// crossed the edge, when the detector says so. Returns how many became active.
 pub fn track(
     detector: &dyn ContactDetector,
     shapes: &[BlockShape],
-    trial: &[[f64; 6]],
+    trial: &[Motion],
     set: &mut ContactSet,
 ) -> usize {
     if !detector.tracks_trajectories() {
         return 0;
     }
-    let moved = |block: u32, p: DVec2| {
-        let s = &shapes[block as usize];
-        displace_point(p, s.centroid, &trial[block as usize])
-    };
+    let moved = |block: u32, p: DVec2| trial[block as usize].apply(p);
     let mut changed = 0;
     for c in set.contacts.iter_mut().filter(|c| !c.active) {
         let k = c.key;

@@ -32,7 +32,7 @@ use dda_contact::{
     BlockShape, ContactDetector, ContactSet, ContactState, DetectionParams, NeighbourPair,
     detector_by_name, neighbour_pairs,
 };
-use dda_geom::{Aabb, ConvexPolygon, DVec2, VertexEdge, displace_point};
+use dda_geom::{Aabb, ConvexPolygon, DVec2, Motion, VertexEdge, displace_point};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
@@ -161,9 +161,10 @@ const DT_FLOOR: f64 = 1e-9;
 
 /// Most springs that may differ from the factorised matrix before an OCI iteration
 /// assembles and factorises anew rather than solving through a low-rank update. Measured
-/// on paper 5.2b (4,956 unknowns): a factorisation costs 2.9 ms, a low-rank solve 0.5 ms
-/// plus 0.1 ms per spring first seen since the factorisation; over whole runs the solve
-/// time per OCI iteration was 1.95 ms at 24, 2.03 at 48, 2.08 at 64 and 2.39 at 96.
+/// on paper 5.2b (4,956 unknowns): a factorisation with its solve costs about 2.9 ms, a
+/// low-rank solve about 0.3 ms plus 0.1 ms per row first seen since the factorisation.
+/// Over whole runs the solve time per OCI iteration was 1.83 ms at 16, 1.85 at 24, 1.80
+/// at 40 and 2.02 at 64: flat from 16 to 40.
 const MAX_RANK: usize = 24;
 
 /// A spring in effect in an OCI iteration: its contact, whether it is the shear spring
@@ -206,15 +207,20 @@ pub struct Simulation {
     pair_entry: Vec<Option<Entry>>,
     rows: Vec<Row>,
     springs: Vec<Spring>,
-    forces: Vec<(f64, Row)>,
+    /// Friction forces in effect: contact, magnitude, row.
+    forces: Vec<(u32, f64, Row)>,
     factored_springs: Vec<Spring>,
+    factored_forces: Vec<(u32, f64, Row)>,
     changes: Vec<RankOne>,
+    rhs_changes: Vec<RankOne>,
     /// Whether the system's factor is of this attempt's matrix (with `factored_springs`).
     factor_current: bool,
     base_k: Vec<Mat6>,
     base_f: Vec<Vec6>,
     mass: Vec<Mat6>,
     d: Vec<Vec6>,
+    /// The trial motion of each block as a map of its points.
+    motions: Vec<Motion>,
 }
 
 impl std::fmt::Debug for Simulation {
@@ -291,12 +297,15 @@ impl Simulation {
             springs: Vec::new(),
             forces: Vec::new(),
             factored_springs: Vec::new(),
+            factored_forces: Vec::new(),
             changes: Vec::new(),
+            rhs_changes: Vec::new(),
             factor_current: false,
             base_k: Vec::new(),
             base_f: Vec::new(),
             mass: Vec::new(),
             d: vec![[0.0; 6]; n],
+            motions: Vec::with_capacity(n),
         }
     }
 
@@ -659,7 +668,7 @@ impl Simulation {
                             limit += j.cohesion * contact_length(&c, &self.shapes);
                         }
                         let row = shear_row(&c, &self.shapes, c.r.clamp(0.0, 1.0));
-                        self.forces.push((-c.slide_dir * limit, row));
+                        self.forces.push((contact, -c.slide_dir * limit, row));
                     }
                     _ => {}
                 }
@@ -679,7 +688,7 @@ impl Simulation {
                 }
             }
         }
-        for (f, row) in &self.forces {
+        for (_, f, row) in &self.forces {
             for (b, c) in row.blocks.iter().zip(&row.c) {
                 if let Some(fi) = self.free[*b as usize] {
                     self.system.add_rhs(fi, *f, c);
@@ -706,6 +715,7 @@ impl Simulation {
             .map_err(|source| SimError::Solve { t: self.t, source })?;
         rec.solve_s += t1.elapsed().as_secs_f64();
         self.factored_springs.clone_from(&self.springs);
+        self.factored_forces.clone_from(&self.forces);
         self.factor_current = true;
         Ok(())
     }
@@ -728,7 +738,7 @@ impl Simulation {
         self.assemble_rhs();
         let t1 = Instant::now();
         rec.assembly_s += (t1 - t0).as_secs_f64();
-        let solved = self.system.solve_low_rank(&[]);
+        let solved = self.system.resolve();
         rec.solve_s += t1.elapsed().as_secs_f64();
         if solved {
             let t2 = Instant::now();
@@ -743,47 +753,105 @@ impl Simulation {
     /// [`MAX_RANK`] terms.
     fn spring_changes(&mut self) -> Option<()> {
         self.changes.clear();
+        self.rhs_changes.clear();
         let (now, then) = (&self.springs, &self.factored_springs);
         let (mut i, mut j) = (0, 0);
         let free = &self.free;
-        let term = |s: &Spring, sign: f64| RankOne {
-            blocks: [
+        let (changes, rhs_changes) = (&mut self.changes, &mut self.rhs_changes);
+        // A spring added (sign 1) or removed (-1): its stiffness p c c^T and its
+        // right-hand side -p g0 c.
+        let mut change = |s: &Spring, sign: f64| {
+            let blocks = [
                 free[s.row.blocks[0] as usize],
                 free[s.row.blocks[1] as usize],
-            ],
-            c: s.row.c,
-            s: sign * s.penalty,
+            ];
+            let p = sign * s.penalty;
+            changes.push(RankOne {
+                blocks,
+                c: s.row.c,
+                s: p,
+            });
+            rhs_changes.push(RankOne {
+                blocks,
+                c: s.row.c,
+                s: -p * s.row.g0,
+            });
+            changes.len() <= MAX_RANK
         };
         while i < now.len() || j < then.len() {
             let key = |s: &Spring| (s.contact, s.shear);
-            match (now.get(i), then.get(j)) {
+            let within = match (now.get(i), then.get(j)) {
                 (Some(a), Some(b)) if key(a) == key(b) => {
-                    if a.row.c != b.row.c || a.penalty != b.penalty {
-                        self.changes.push(term(a, 1.0));
-                        self.changes.push(term(b, -1.0));
-                    }
                     i += 1;
                     j += 1;
+                    a.row == b.row && a.penalty == b.penalty || {
+                        change(a, 1.0);
+                        change(b, -1.0)
+                    }
                 }
                 (Some(a), Some(b)) if key(a) < key(b) => {
-                    self.changes.push(term(a, 1.0));
                     i += 1;
+                    change(a, 1.0)
                 }
                 (Some(a), None) => {
-                    self.changes.push(term(a, 1.0));
                     i += 1;
+                    change(a, 1.0)
                 }
                 (_, Some(b)) => {
-                    self.changes.push(term(b, -1.0));
                     j += 1;
+                    change(b, -1.0)
                 }
                 (None, None) => break,
-            }
-            if self.changes.len() > MAX_RANK {
+            };
+            if !within {
                 return None;
             }
         }
         Some(())
+    }
+
+    /// Adds the changes of the friction forces since the factorisation to the
+    /// right-hand side changes (both lists are in contact order).
+    fn force_changes(&mut self) {
+        let (now, then) = (&self.forces, &self.factored_forces);
+        let free = &self.free;
+        let mut change = |f: f64, row: &Row| {
+            self.rhs_changes.push(RankOne {
+                blocks: [free[row.blocks[0] as usize], free[row.blocks[1] as usize]],
+                c: row.c,
+                s: f,
+            });
+        };
+        let (mut i, mut j) = (0, 0);
+        while i < now.len() || j < then.len() {
+            match (now.get(i), then.get(j)) {
+                (Some(a), Some(b)) if a.0 == b.0 => {
+                    if a.2 == b.2 {
+                        if a.1 != b.1 {
+                            change(a.1 - b.1, &a.2);
+                        }
+                    } else {
+                        change(a.1, &a.2);
+                        change(-b.1, &b.2);
+                    }
+                    i += 1;
+                    j += 1;
+                }
+                (Some(a), Some(b)) if a.0 < b.0 => {
+                    change(a.1, &a.2);
+                    i += 1;
+                }
+                (Some(a), None) => {
+                    change(a.1, &a.2);
+                    i += 1;
+                }
+                (_, Some(b)) => {
+                    change(-b.1, &b.2);
+                    j += 1;
+                }
+                (None, None) => break,
+            }
+        }
     }
 
     /// Solves for the current contact states: through the factor already computed when
@@ -796,11 +864,10 @@ impl Simulation {
         self.totals.normal_springs += self.springs.len() as u64 - shear;
         self.totals.friction_forces += self.forces.len() as u64;
         if self.factor_current && self.system.is_factored() && self.spring_changes().is_some() {
-            self.system.clear_rhs();
-            self.assemble_rhs();
+            self.force_changes();
             let t1 = Instant::now();
             rec.assembly_s += (t1 - t0).as_secs_f64();
-            let solved = self.system.solve_low_rank(&self.changes);
+            let solved = self.system.solve_low_rank(&self.changes, &self.rhs_changes);
             rec.solve_s += t1.elapsed().as_secs_f64();
             if solved {
                 return Ok(());
@@ -825,7 +892,7 @@ impl Simulation {
             let activated = dda_contact::track(
                 self.detector.as_ref(),
                 &self.shapes,
-                &self.d,
+                &self.motions,
                 &mut self.contacts,
             );
             if activated > 0 {
@@ -854,11 +921,14 @@ impl Simulation {
     /// Copies the solution into per-block motions (zero for fixed blocks).
     fn gather_solution(&mut self) {
         let nd = self.nd;
+        self.motions.clear();
         for (i, f) in self.free.iter().enumerate() {
             self.d[i] = [0.0; 6];
             if let Some(f) = f {
                 self.d[i][..nd].copy_from_slice(self.system.solution(*f));
             }
+            self.motions
+                .push(Motion::new(self.shapes[i].centroid, &self.d[i]));
         }
     }
 
@@ -951,18 +1021,11 @@ impl Simulation {
     fn trial_ratio(&self, c: &dda_contact::Contact) -> f64 {
         let (p1, p2, p3) = contact_points(c, &self.shapes);
         let k = c.key;
-        let (ci, cj) = (
-            self.shapes[k.vertex_block as usize].centroid,
-            self.shapes[k.edge_block as usize].centroid,
+        let (mv, me) = (
+            &self.motions[k.vertex_block as usize],
+            &self.motions[k.edge_block as usize],
         );
-        let dv = &self.d[k.vertex_block as usize];
-        let de = &self.d[k.edge_block as usize];
-        VertexEdge::new(
-            displace_point(p1, ci, dv),
-            displace_point(p2, cj, de),
-            displace_point(p3, cj, de),
-        )
-        .r
+        VertexEdge::new(mv.apply(p1), me.apply(p2), me.apply(p3)).r
     }
 
     /// Largest vertex displacement (first order) and largest |rotation| of the trial

@@ -16,7 +16,7 @@ use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
     factorize_symbolic_cholesky,
 };
-use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 
 /// Parallelism of the factorisation and solve: sequential. Measured on the 830-block
@@ -61,8 +61,8 @@ pub struct BlockSystem {
     entry_col: Vec<usize>,
     /// Per block entry: whether it is a diagonal block.
     entry_diag: Vec<bool>,
-    col_ptr: Vec<usize>,
-    row_idx: Vec<usize>,
+    /// The scalar lower-triangle pattern (checked once when set, not at each solve).
+    pattern: SymbolicSparseColMat<usize>,
     values: Vec<f64>,
     /// Right-hand side, then the solution, in permuted block order.
     rhs: Vec<f64>,
@@ -75,6 +75,8 @@ pub struct BlockSystem {
     /// n per column), and each column's u.
     z: Vec<f64>,
     z_rows: Vec<([Option<u32>; 2], [Vec6; 2])>,
+    /// The solution of the factorised system, K^-1 F.
+    y0: Vec<f64>,
     /// Per term of the current low-rank solve: its column in `z`.
     term_col: Vec<usize>,
     /// The capacitance matrix (row-major) and its right-hand side, then solution.
@@ -110,8 +112,7 @@ impl Default for BlockSystem {
             col_rows: Vec::new(),
             entry_col: Vec::new(),
             entry_diag: Vec::new(),
-            col_ptr: vec![0],
-            row_idx: Vec::new(),
+            pattern: SymbolicSparseColMat::new_checked(0, 0, vec![0], None, Vec::new()),
             values: Vec::new(),
             rhs: Vec::new(),
             symbolic: None,
@@ -120,6 +121,7 @@ impl Default for BlockSystem {
             factored: false,
             z: Vec::new(),
             z_rows: Vec::new(),
+            y0: Vec::new(),
             term_col: Vec::new(),
             cap: Vec::new(),
             cap_rhs: Vec::new(),
@@ -190,33 +192,34 @@ impl BlockSystem {
 
         // Scalar lower-triangle CSC.
         let n = nb * nd;
-        self.col_ptr.clear();
-        self.row_idx.clear();
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        let mut row_idx = Vec::new();
         self.entry_col.clear();
         self.entry_col.resize(self.col_rows.len() * nd, 0);
         self.entry_diag.clear();
         self.entry_diag.resize(self.col_rows.len(), false);
-        self.col_ptr.push(0);
+        col_ptr.push(0);
         for jb in 0..nb {
             self.entry_diag[self.col_start[jb]] = true;
             for q in 0..nd {
                 for e in self.col_start[jb]..self.col_start[jb + 1] {
                     let ib = self.col_rows[e] as usize;
-                    self.entry_col[e * nd + q] = self.row_idx.len();
+                    self.entry_col[e * nd + q] = row_idx.len();
                     let first = if ib == jb { q } else { 0 };
-                    self.row_idx.extend((first..nd).map(|a| ib * nd + a));
+                    row_idx.extend((first..nd).map(|a| ib * nd + a));
                 }
-                self.col_ptr.push(self.row_idx.len());
+                col_ptr.push(row_idx.len());
             }
         }
         self.values.clear();
-        self.values.resize(self.row_idx.len(), 0.0);
+        self.values.resize(row_idx.len(), 0.0);
         self.rhs.clear();
         self.rhs.resize(n, 0.0);
 
         // With the identity ordering faer's symbolic analysis reads the upper triangle,
         // so it gets the transpose of our lower pattern.
-        let (up_ptr, up_rows) = transpose_pattern(n, &self.col_ptr, &self.row_idx);
+        let (up_ptr, up_rows) = transpose_pattern(n, &col_ptr, &row_idx);
+        self.pattern = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
         let a = SymbolicSparseColMatRef::new_checked(n, n, &up_ptr, None, &up_rows);
         let symbolic = factorize_symbolic_cholesky(
             a,
@@ -381,10 +384,7 @@ impl BlockSystem {
         let Some(symbolic) = self.symbolic.as_ref() else {
             return Err(SolveError::Symbolic("no pattern set".into()));
         };
-        let a = SparseColMatRef::new(
-            SymbolicSparseColMatRef::new_checked(n, n, &self.col_ptr, None, &self.row_idx),
-            &self.values,
-        );
+        let a = SparseColMatRef::new(self.pattern.as_ref(), &self.values);
         let stack = MemStack::new(&mut self.mem);
         symbolic
             .factorize_numeric_llt(
@@ -404,19 +404,40 @@ impl BlockSystem {
         let llt = LltRef::new(symbolic, &self.l_values);
         let rhs = MatMut::from_column_major_slice_mut(&mut self.rhs, n, 1);
         llt.solve_in_place_with_conj(Conj::No, rhs, PAR, MemStack::new(&mut self.mem));
+        self.y0.clone_from(&self.rhs);
         Ok(())
     }
 
-    /// Solves (K + sum s u u^T) x = F with the factor of K from the last
-    /// [`BlockSystem::solve`], by the Woodbury identity, for a right-hand side assembled
-    /// since with [`BlockSystem::clear_rhs`] and [`BlockSystem::add_rhs`]:
-    /// x = y - Z C^-1 U^T y with y = K^-1 F, Z = K^-1 U, C = S^-1 + U^T Z.
+    /// Solves the right-hand side assembled since [`BlockSystem::clear_rhs`] with the
+    /// factor of the last [`BlockSystem::solve`] (which may be of an earlier matrix);
+    /// false when there is no factor.
+    pub fn resolve(&mut self) -> bool {
+        let n = self.nb * self.nd;
+        let Some(symbolic) = self.symbolic.as_ref() else {
+            return false;
+        };
+        if !self.factored {
+            return false;
+        }
+        if n > 0 {
+            let llt = LltRef::new(symbolic, &self.l_values);
+            let rhs = MatMut::from_column_major_slice_mut(&mut self.rhs, n, 1);
+            llt.solve_in_place_with_conj(Conj::No, rhs, PAR, MemStack::new(&mut self.mem));
+        }
+        true
+    }
+
+    /// Solves (K + sum s u u^T) x = F + sum g v, where K and F are the matrix and
+    /// right-hand side of the last [`BlockSystem::solve`], `terms` the rank-one changes of
+    /// the matrix (u, s) and `rhs_terms` the changes of the right-hand side (v with its
+    /// coefficient g in `s`), by the Woodbury identity:
+    /// x = y - Z C^-1 U^T y with y = K^-1 F + sum g K^-1 v, Z = K^-1 U, C = S^-1 + U^T Z.
     ///
-    /// Each Z column is solved once per factorisation and kept, so a term that stays in
-    /// the list from one call to the next costs nothing more. Returns false, leaving the
-    /// right-hand side untouched, when there is no valid factor or C is numerically
+    /// K^-1 F is kept from the factorisation, and each K^-1 u is solved once per
+    /// factorisation and kept, so a row that stays in the lists from one call to the next
+    /// costs nothing more. Returns false when there is no valid factor or C is numerically
     /// singular: the caller then assembles and factorises.
-    pub fn solve_low_rank(&mut self, terms: &[RankOne]) -> bool {
+    pub fn solve_low_rank(&mut self, terms: &[RankOne], rhs_terms: &[RankOne]) -> bool {
         let n = self.nb * self.nd;
         let Some(symbolic) = self.symbolic.as_ref() else {
             return false;
@@ -430,7 +451,7 @@ impl BlockSystem {
         // Columns of Z: reuse those already solved, solve the new ones together.
         let first_new = self.z_rows.len();
         self.term_col.clear();
-        for t in terms {
+        for t in terms.iter().chain(rhs_terms) {
             let key = (t.blocks, t.c);
             let col = match self.z_rows.iter().position(|r| *r == key) {
                 Some(col) => col,
@@ -454,25 +475,30 @@ impl BlockSystem {
             self.term_col.push(col);
         }
         let added = self.z_rows.len() - first_new;
-        let req = symbolic.solve_in_place_scratch::<f64>(added.max(1), PAR);
-        if req.size_bytes() > self.mem.len() {
-            self.mem = MemBuffer::new(req);
-        }
-        let llt = LltRef::new(symbolic, &self.l_values);
         if added > 0 {
+            let req = symbolic.solve_in_place_scratch::<f64>(added, PAR);
+            if req.size_bytes() > self.mem.len() {
+                self.mem = MemBuffer::new(req);
+            }
+            let llt = LltRef::new(symbolic, &self.l_values);
             let cols = MatMut::from_column_major_slice_mut(&mut self.z[first_new * n..], n, added);
             llt.solve_in_place_with_conj(Conj::No, cols, PAR, MemStack::new(&mut self.mem));
         }
-        let y = MatMut::from_column_major_slice_mut(&mut self.rhs, n, 1);
-        llt.solve_in_place_with_conj(Conj::No, y, PAR, MemStack::new(&mut self.mem));
+        // y = K^-1 F + sum g K^-1 v.
+        self.rhs.copy_from_slice(&self.y0);
+        let k = terms.len();
+        for (t, &col) in rhs_terms.iter().zip(&self.term_col[k..]) {
+            for (y, z) in self.rhs.iter_mut().zip(&self.z[col * n..(col + 1) * n]) {
+                *y += t.s * z;
+            }
+        }
 
         // C = S^-1 + U^T Z and U^T y.
-        let k = terms.len();
         self.cap.clear();
         self.cap.resize(k * k, 0.0);
         self.cap_rhs.clear();
         for (i, t) in terms.iter().enumerate() {
-            for (j, &col) in self.term_col.iter().enumerate() {
+            for (j, &col) in self.term_col[..k].iter().enumerate() {
                 self.cap[i * k + j] = self.row_dot(t, &self.z[col * n..(col + 1) * n]);
             }
             self.cap[i * k + i] += 1.0 / t.s;
@@ -481,7 +507,7 @@ impl BlockSystem {
         if !lu_solve_in_place(&mut self.cap, &mut self.cap_rhs, k) {
             return false;
         }
-        for (&col, &w) in self.term_col.iter().zip(&self.cap_rhs) {
+        for (&col, &w) in self.term_col[..k].iter().zip(&self.cap_rhs) {
             for (x, z) in self.rhs.iter_mut().zip(&self.z[col * n..(col + 1) * n]) {
                 *x -= w * z;
             }
@@ -594,7 +620,8 @@ mod tests {
 
     /// Low-rank solves after a factorisation satisfy the changed system to rounding: a
     /// spring added between two blocks, one to a fixed block (one side only), one removed,
-    /// over two successive calls that share terms (the second reuses solved columns).
+    /// and a load added, over two successive calls that share terms (the second reuses
+    /// solved columns).
     #[test]
     fn low_rank_solve_matches_changed_matrix() {
         let (nb, nd) = (5usize, 6usize);
@@ -637,10 +664,22 @@ mod tests {
         let spring = row([Some(1), Some(2)], 30.0);
         let to_fixed = row([Some(3), None], 50.0);
         let removed = row([Some(0), Some(4)], -1.0);
-        for terms in [vec![spring, to_fixed], vec![spring, removed, to_fixed]] {
-            sys.clear_rhs();
-            add_rhs(&mut sys);
-            assert!(sys.solve_low_rank(&terms));
+        let load = row([Some(2), Some(4)], 0.7);
+        for (terms, loads) in [
+            (vec![spring, to_fixed], vec![]),
+            (vec![spring, removed, to_fixed], vec![load]),
+        ] {
+            assert!(sys.solve_low_rank(&terms, &loads));
+            let mut f = f.clone();
+            for t in &loads {
+                for (b, c) in t.blocks.iter().zip(&t.c) {
+                    if let Some(b) = b {
+                        for a in 0..nd {
+                            f[*b as usize * nd + a] += t.s * c[a];
+                        }
+                    }
+                }
+            }
             let mut m = dense.clone();
             for t in &terms {
                 let mut u = vec![0.0; n];
@@ -666,7 +705,7 @@ mod tests {
         assert_eq!(sys.low_rank_count, 2);
         // A change of the matrix drops the factor: the low-rank path declines.
         sys.add_diagonal(0, &[[1.0; 6]; 6]);
-        assert!(!sys.solve_low_rank(&[spring]));
+        assert!(!sys.solve_low_rank(&[spring], &[]));
     }
 
     #[test]

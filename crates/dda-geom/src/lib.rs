@@ -28,7 +28,7 @@ pub use self::measures::{
     outward_normal, projection_ratio,
 };
 pub use self::polygon::{
-    ConvexPolygon, DEFAULT_REL_TOL, Moments, PolygonOptions, Repairs, displace_point,
+    ConvexPolygon, DEFAULT_REL_TOL, Moments, Motion, PolygonOptions, Repairs, displace_point,
 };
 
 /// 2D vector type used throughout (glam's `DVec2`, f64).
