@@ -1,5 +1,6 @@
 //! Built-in scenes: runnable without a file (`dda run NAME`, `dda scenes`).
 
+use crate::hard_cases::HARD_CASES;
 use crate::paper::PAPER_COLUMNS;
 use dda_core::Scene;
 
@@ -17,8 +18,49 @@ pub struct Builtin {
 /// The scene `dda run` runs when given none.
 pub const DEFAULT_BUILTIN: &str = "paper-5.1b-column-93";
 
-/// All built-in scenes.
-pub const BUILTINS: [Builtin; 4] = [
+/// All built-in scenes: the paper's section 4 hard cases and section 5 columns.
+pub const BUILTINS: [Builtin; 11] = [
+    Builtin {
+        name: "paper-4.1-sharp-corners",
+        description: "paper 4.1: triangles with 11.4 deg tips, A at 1 m/s onto fixed B \
+                      (Table 1)",
+        build: || HARD_CASES[0].scene(),
+    },
+    Builtin {
+        name: "paper-4.2-short-edges",
+        description: "paper 4.2: 18-gons with 0.35 m edges, A at 5 m/s onto fixed B (Table 1)",
+        build: || HARD_CASES[1].scene(),
+    },
+    Builtin {
+        name: "paper-4.3a-flat-polygons",
+        description: "paper 4.3a: flat plates with 0.02 m edges, A at 1 m/s onto fixed B, \
+                      d_tol 0.2 m (Table 1)",
+        build: || HARD_CASES[2].scene(),
+    },
+    Builtin {
+        name: "paper-4.3b-flat-polygons",
+        description: "paper 4.3b: flat plates with 0.02 m edges, A at 1 m/s onto fixed B, \
+                      d_tol 0.01 m (Table 1)",
+        build: || HARD_CASES[3].scene(),
+    },
+    Builtin {
+        name: "paper-4.4a-corner-small-edge",
+        description: "paper 4.4a: a 0.02 m edge at 5 m/s onto a fixed corner, d_tol 0.2 m, \
+                      penalty 3e10 (Table 2)",
+        build: || HARD_CASES[4].scene(),
+    },
+    Builtin {
+        name: "paper-4.4b-corner-small-edge",
+        description: "paper 4.4b: a 0.02 m edge at 5 m/s onto a fixed corner, d_tol 0.01 m, \
+                      penalty 3e10 (Table 2)",
+        build: || HARD_CASES[5].scene(),
+    },
+    Builtin {
+        name: "paper-4.4c-corner-small-edge",
+        description: "paper 4.4c: a 0.02 m edge at 5 m/s onto a fixed corner, d_tol 0.01 m, \
+                      penalty 3e6 (Table 2)",
+        build: || HARD_CASES[6].scene(),
+    },
     Builtin {
         name: "paper-5.1a-column-20",
         description: "paper 5.1a: 10 m x 20 m column, one joint set at 60 deg, 20 blocks, \
@@ -63,12 +105,15 @@ mod tests {
             let scene = (b.build)();
             assert_eq!(scene.name, b.name);
             let model = scene.validate().expect("valid built-in");
-            assert!(model.blocks.len() > 2, "{} has no blocks", b.name);
+            assert!(model.blocks.len() >= 2, "{} has no blocks", b.name);
         }
         assert!(builtin(DEFAULT_BUILTIN).is_some());
-        for (b, c) in BUILTINS.iter().zip(PAPER_COLUMNS) {
-            assert_eq!(b.name, c.name());
-        }
+        let names: Vec<String> = HARD_CASES
+            .iter()
+            .map(|c| c.name())
+            .chain(PAPER_COLUMNS.iter().map(|c| c.name()))
+            .collect();
+        assert_eq!(BUILTINS.map(|b| b.name.to_string()).to_vec(), names);
         assert!(builtin("nope").is_none());
     }
 }

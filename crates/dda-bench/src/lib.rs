@@ -1,11 +1,16 @@
-//! Scene generators for dda-rs: jointed columns cut with `dda-geom`, the paper's section 5
-//! columns, and the built-in scenes the `dda` command runs without a file.
+//! Scene generators for dda-rs: jointed columns cut with `dda-geom`, the paper's section 4
+//! hard cases and section 5 columns, and the built-in scenes the `dda` command runs
+//! without a file.
 
 pub mod builtin;
 pub mod column;
+pub mod hard_cases;
 pub mod layout;
 pub mod paper;
+pub mod verdict;
 
 pub use self::builtin::{BUILTINS, Builtin, DEFAULT_BUILTIN, builtin};
 pub use self::column::{ColumnError, ColumnSpec, column_scene, jointed_column};
+pub use self::hard_cases::{HARD_CASES, HardCase};
 pub use self::paper::{PAPER_COLUMNS, PaperColumn};
+pub use self::verdict::{Outcome, judge_collision};

@@ -1,0 +1,211 @@
+//! The "physically permissible" verdict on a collision of a moving block A with a fixed
+//! block B (paper section 4), computed from a run, with these criteria (ours: the paper
+//! judges its figures by eye):
+//!
+//! 1. The run completes and no block state is NaN or infinite.
+//! 2. The blocks' overlap, measured geometrically at the end of every step as the least
+//!    translation that separates them (separating axes), stays below the contact
+//!    tolerance d_tol: a detector that loses a contact lets the blocks pass through each
+//!    other, which the contacts' own penetration would not show.
+//! 3. At the end A is apart from B and moving away from it (the gap, measured after each
+//!    step by separating axes, did not shrink over the last step), or at rest on it
+//!    (speed below 1e-3 of the initial speed while touching).
+//! 4. Kinetic plus elastic (strain) energy never exceeds its initial value by more than
+//!    1%: a frictionless collision with a fixed block cannot create energy. The penalty
+//!    springs' energy is left out, so the check is lenient while a contact is closed.
+//! 5. No spurious spin: A's rotational kinetic energy alone never exceeds the initial
+//!    energy by more than 1% (|omega| <= 1.01 v0 / r_g, r_g its radius of gyration).
+
+use dda_core::scene::Mode;
+use dda_core::{SimError, Simulation};
+use dda_geom::{ConvexPolygon, DVec2};
+use serde::Serialize;
+
+/// What a collision run did, and whether it is physically permissible.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Outcome {
+    /// All criteria met.
+    pub permissible: bool,
+    /// The criteria not met, in words (empty when permissible).
+    pub failures: Vec<String>,
+    /// A's centroid at the end, m.
+    pub centroid: [f64; 2],
+    /// A's velocity at the end, m/s.
+    pub velocity: [f64; 2],
+    /// A's accumulated rotation, rad.
+    pub rotation: f64,
+    /// Active contacts at the end.
+    pub active_contacts: usize,
+    /// Largest geometric overlap of A and B over the run, m.
+    pub max_overlap: f64,
+    /// Largest (kinetic + elastic) energy over its initial value.
+    pub max_energy_ratio: f64,
+    /// Steps taken.
+    pub steps: u64,
+}
+
+/// Runs `sim` (block 0 moving, block 1 fixed) to its end and judges it.
+pub fn judge_collision(sim: &mut Simulation) -> Outcome {
+    let d_tol = sim.model().params.d_tol;
+    let e0 = energy(sim).max(f64::MIN_POSITIVE);
+    let v0 = speed(sim);
+    let mut failures = Vec::new();
+    let mut max_overlap = 0.0f64;
+    let mut max_ratio = 1.0f64;
+    let mut max_spin_ratio = 0.0f64;
+    let [a0, b0] = [&sim.blocks()[0].polygon, &sim.blocks()[1].polygon];
+    let mut gaps = [separation(a0, b0).0; 2];
+    let result: Result<(), SimError> = sim.run(|s, _| {
+        let [a, b] = [&s.blocks()[0].polygon, &s.blocks()[1].polygon];
+        let gap = separation(a, b).0;
+        gaps = [gaps[1], gap];
+        max_overlap = max_overlap.max(gap.min(0.0).abs());
+        max_ratio = max_ratio.max(energy(s) / e0);
+        max_spin_ratio = max_spin_ratio.max(spin_energy(s) / e0);
+    });
+    if let Err(e) = &result {
+        failures.push(format!("the run stopped: {e}"));
+    }
+    let a = &sim.blocks()[0];
+    let finite = sim
+        .blocks()
+        .iter()
+        .all(|b| b.velocity.iter().all(|v| v.is_finite()) && b.polygon.centroid().is_finite());
+    if !finite {
+        failures.push("a block state is not finite".into());
+    }
+    if max_overlap >= d_tol {
+        failures.push(format!(
+            "overlap {max_overlap:.3e} m reached the contact tolerance {d_tol:.3e} m"
+        ));
+    }
+    let [before, gap] = gaps;
+    let v = DVec2::new(a.velocity[0], a.velocity[1]);
+    let at_rest = v.length() <= 1e-3 * v0 && gap > -d_tol;
+    let leaving = gap > 0.0 && gap >= before;
+    if !(leaving || at_rest) {
+        failures.push(format!(
+            "A ends neither apart and moving away nor at rest on B (gap {gap:.3e} m, \
+             {before:.3e} m a step before)"
+        ));
+    }
+    if max_ratio > 1.01 {
+        failures.push(format!(
+            "kinetic + elastic energy rose to {max_ratio:.4} of its initial value"
+        ));
+    }
+    if max_spin_ratio > 1.01 {
+        failures.push(format!(
+            "spin energy rose to {max_spin_ratio:.4} of the initial energy"
+        ));
+    }
+    let c = a.polygon.centroid();
+    Outcome {
+        permissible: failures.is_empty(),
+        failures,
+        centroid: [c.x, c.y],
+        velocity: [v.x, v.y],
+        rotation: a.rotation,
+        active_contacts: sim.contacts().active().count(),
+        max_overlap,
+        max_energy_ratio: max_ratio,
+        steps: sim.totals().steps,
+    }
+}
+
+/// Speed of block 0's centroid.
+fn speed(sim: &Simulation) -> f64 {
+    let v = &sim.blocks()[0].velocity;
+    DVec2::new(v[0], v[1]).length()
+}
+
+/// Kinetic energy plus the strain energy of the free blocks' stresses (plane stress:
+/// area / (2E) (sx^2 + sy^2 - 2 nu sx sy + 2 (1 + nu) txy^2)).
+fn energy(sim: &Simulation) -> f64 {
+    let model = sim.model();
+    let kinetic = if model.params.mode == Mode::Dynamic {
+        sim.kinetic_energy()
+    } else {
+        0.0
+    };
+    let elastic: f64 = sim
+        .blocks()
+        .iter()
+        .zip(&model.blocks)
+        .filter(|(_, m)| !m.fixed)
+        .map(|(b, m)| {
+            let mat = model.materials[m.material];
+            let [sx, sy, txy] = b.stress;
+            let (e, nu) = (mat.young, mat.poisson);
+            if e > 0.0 {
+                b.polygon.area() / (2.0 * e)
+                    * (sx * sx + sy * sy - 2.0 * nu * sx * sy + 2.0 * (1.0 + nu) * txy * txy)
+            } else {
+                0.0
+            }
+        })
+        .sum();
+    kinetic + elastic
+}
+
+/// Rotational kinetic energy of block 0, 1/2 rho J omega^2.
+fn spin_energy(sim: &Simulation) -> f64 {
+    let model = sim.model();
+    let b = &sim.blocks()[0];
+    let rho = model.materials[model.blocks[0].material].density;
+    let m = b.polygon.moments();
+    let j = m.sxx + m.syy;
+    0.5 * rho * j * b.velocity[2] * b.velocity[2]
+}
+
+/// Signed separation of two convex polygons by separating axes: the largest gap over
+/// the edge normals of both (positive: apart by at least that much; negative: the
+/// least overlap), and the axis it is along, pointing from `b` to `a`.
+pub fn separation(a: &ConvexPolygon, b: &ConvexPolygon) -> (f64, DVec2) {
+    let mut best = (f64::NEG_INFINITY, DVec2::Y);
+    for (p, q, flip) in [(a, b, -1.0), (b, a, 1.0)] {
+        for i in 0..p.len() {
+            let n = p.normal(i);
+            let (lo_q, _) = extent(q, n);
+            let (_, hi_p) = extent(p, n);
+            // q beyond p's face i by lo_q - hi_p along p's outward normal n.
+            let gap = lo_q - hi_p;
+            if gap > best.0 {
+                best = (gap, flip * n);
+            }
+        }
+    }
+    best
+}
+
+/// The range of `n . x` over a polygon.
+fn extent(p: &ConvexPolygon, n: DVec2) -> (f64, f64) {
+    p.vertices()
+        .iter()
+        .map(|v| n.dot(*v))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+            (lo.min(x), hi.max(x))
+        })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square(x: f64, y: f64) -> ConvexPolygon {
+        ConvexPolygon::from_coords(&[[x, y], [x + 1.0, y], [x + 1.0, y + 1.0], [x, y + 1.0]])
+            .expect("square")
+    }
+
+    /// Separation of unit squares: apart, touching, overlapping, with the axis from b to a.
+    #[test]
+    fn separation_of_squares() {
+        let b = square(0.0, 0.0);
+        let (gap, n) = separation(&square(0.0, 1.5), &b);
+        assert!((gap - 0.5).abs() < 1e-12 && (n - DVec2::Y).length() < 1e-12);
+        let (gap, n) = separation(&square(-1.25, 0.0), &b);
+        assert!((gap - 0.25).abs() < 1e-12 && (n + DVec2::X).length() < 1e-12);
+        let (gap, _) = separation(&square(0.0, 0.9), &b);
+        assert!((gap + 0.1).abs() < 1e-12);
+    }
+}
