@@ -2,7 +2,7 @@
 //! fixed base, under gravity.
 
 use dda_core::Scene;
-use dda_core::scene::{Analysis, BlockSpec, Joint, Material};
+use dda_core::scene::{Analysis, BlockSpec, Joint, Material, Mode, Plane};
 use dda_geom::{
     ConvexPolygon, DVec2, JointSet, JointSetError, PolygonError, cut_by_joint_sets, shapes,
 };
@@ -99,5 +99,34 @@ pub fn column_scene(name: &str, blocks: &[ConvexPolygon], analysis: Analysis) ->
         )]),
         joints: BTreeMap::from([("default".into(), Joint::default())]),
         blocks: specs,
+    }
+}
+
+/// The paper's analysis settings (Tables 1-3): dynamic, max rotation 2 deg, the cover
+/// detector, deformable blocks in plane stress, at most 6 OCI iterations, 10 frames.
+pub fn paper_analysis(
+    duration: f64,
+    time_step: f64,
+    max_displacement: f64,
+    contact_tolerance: f64,
+    penalty: f64,
+    gravity: Option<[f64; 2]>,
+) -> Analysis {
+    Analysis {
+        mode: Mode::Dynamic,
+        duration,
+        time_step,
+        max_displacement,
+        max_rotation_deg: 2.0,
+        contact_tolerance: Some(contact_tolerance),
+        normal_penalty: penalty,
+        shear_penalty: None,
+        fixed_penalty: None,
+        detector: "cover".into(),
+        gravity,
+        deformable: true,
+        plane: Plane::Stress,
+        max_oci: 6,
+        frames: 10,
     }
 }

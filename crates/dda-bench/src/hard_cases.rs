@@ -22,8 +22,9 @@
 //!   the contact tolerance: its kinetic energy, 7.2 kg at 5 m/s, is 90 J, and a spring of
 //!   3e6 N/m takes it up over 7.7 mm < d_tol = 10 mm.
 
+use crate::column::paper_analysis;
 use dda_core::Scene;
-use dda_core::scene::{Analysis, BlockSpec, Joint, Material, Mode, Plane};
+use dda_core::scene::{BlockSpec, Joint, Material};
 use std::collections::BTreeMap;
 
 /// One of the paper's section 4 cases: its name, Table 1 or 2's parameters, and the
@@ -153,23 +154,14 @@ impl HardCase {
         };
         Scene {
             name: self.name(),
-            analysis: Analysis {
-                mode: Mode::Dynamic,
-                duration: self.duration,
-                time_step: self.time_step,
-                max_displacement: self.max_displacement,
-                max_rotation_deg: 2.0,
-                contact_tolerance: Some(self.contact_tolerance),
-                normal_penalty: self.penalty,
-                shear_penalty: None,
-                fixed_penalty: None,
-                detector: "cover".into(),
-                gravity: None,
-                deformable: true,
-                plane: Plane::Stress,
-                max_oci: 6,
-                frames: 10,
-            },
+            analysis: paper_analysis(
+                self.duration,
+                self.time_step,
+                self.max_displacement,
+                self.contact_tolerance,
+                self.penalty,
+                None,
+            ),
             materials: BTreeMap::from([(
                 "rock".into(),
                 Material {

@@ -8,10 +8,10 @@
 //! positions below were found by `examples/fit_columns.rs` (joint layout rules in
 //! [`crate::layout`]), and `tests::columns_match_table_3` re-measures both.
 
-use crate::column::column_scene;
+use crate::column::{column_scene, paper_analysis};
 use crate::layout::{JointLayout, SetLayout, place_joints};
 use dda_core::Scene;
-use dda_core::scene::{Analysis, Mode, Plane};
+use dda_core::scene::Analysis;
 use dda_geom::{ConvexPolygon, DVec2, cut_by_lines, shapes};
 
 /// One of the paper's section 5 columns: Table 3's figures and our joint layout.
@@ -121,23 +121,14 @@ impl PaperColumn {
 
     /// Table 3's analysis: dynamic, 1.0 s, max rotation 2 deg, g = 9.8 m/s^2.
     pub fn analysis(&self) -> Analysis {
-        Analysis {
-            mode: Mode::Dynamic,
-            duration: 1.0,
-            time_step: self.time_step,
-            max_displacement: self.max_displacement,
-            max_rotation_deg: 2.0,
-            contact_tolerance: Some(self.contact_tolerance),
-            normal_penalty: self.penalty,
-            shear_penalty: None,
-            fixed_penalty: None,
-            detector: "cover".into(),
-            gravity: Some([0.0, -9.8]),
-            deformable: true,
-            plane: Plane::Stress,
-            max_oci: 6,
-            frames: 10,
-        }
+        paper_analysis(
+            1.0,
+            self.time_step,
+            self.max_displacement,
+            self.contact_tolerance,
+            self.penalty,
+            Some([0.0, -9.8]),
+        )
     }
 
     /// The scene: the column on a fixed frictionless base, rock of section 5 (density
