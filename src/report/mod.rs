@@ -1,7 +1,8 @@
-//! What a run writes: history.csv rows and SVG frames of the blocks.
+//! What a run writes: history.csv rows and SVG frames of the blocks; pictures of a
+//! collision's outcome for the robustness report.
 
 use dda_core::{Simulation, StepRecord};
-use dda_geom::Aabb;
+use dda_geom::{Aabb, ConvexPolygon, DVec2};
 use std::fmt::Write as _;
 
 /// Header of history.csv.
@@ -83,6 +84,49 @@ pub fn frame_svg(sim: &Simulation, view: &Aabb) -> String {
         );
     }
     s.push_str("</g>\n</svg>\n");
+    s
+}
+
+/// An SVG picture of a run's outcome in `view` (y up): the blocks at the start as dashed
+/// outlines, the blocks now filled (fixed ones grey), and the path of the first free
+/// block's centroid.
+pub fn outcome_svg(
+    sim: &Simulation,
+    start: &[ConvexPolygon],
+    path: &[DVec2],
+    view: &Aabb,
+) -> String {
+    let mut s = frame_svg(sim, view);
+    let size = view.size();
+    let stroke = 0.6 * size.x / 800.0;
+    let mut extra = String::new();
+    let _ = writeln!(
+        extra,
+        r#"<g fill="none" stroke="black" stroke-width="{stroke}" stroke-dasharray="{} {}">"#,
+        4.0 * stroke,
+        3.0 * stroke
+    );
+    for p in start {
+        let pts: Vec<String> = p
+            .vertices()
+            .iter()
+            .map(|v| format!("{:.6},{:.6}", v.x, -v.y))
+            .collect();
+        let _ = writeln!(extra, r#"<polygon points="{}"/>"#, pts.join(" "));
+    }
+    let pts: Vec<String> = path
+        .iter()
+        .map(|v| format!("{:.6},{:.6}", v.x, -v.y))
+        .collect();
+    let _ = writeln!(
+        extra,
+        r##"</g><polyline fill="none" stroke="#c03020" stroke-width="{}" points="{}"/>"##,
+        2.0 * stroke,
+        pts.join(" ")
+    );
+    if let Some(at) = s.rfind("</svg>") {
+        s.insert_str(at, &extra);
+    }
     s
 }
 

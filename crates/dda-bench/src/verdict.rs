@@ -46,6 +46,11 @@ pub struct Outcome {
 
 /// Runs `sim` (block 0 moving, block 1 fixed) to its end and judges it.
 pub fn judge_collision(sim: &mut Simulation) -> Outcome {
+    judge_collision_with(sim, |_| {})
+}
+
+/// [`judge_collision`], calling `on_step` after every step (to record a trajectory).
+pub fn judge_collision_with(sim: &mut Simulation, mut on_step: impl FnMut(&Simulation)) -> Outcome {
     let d_tol = sim.model().params.d_tol;
     let e0 = energy(sim).max(f64::MIN_POSITIVE);
     let v0 = speed(sim);
@@ -62,6 +67,7 @@ pub fn judge_collision(sim: &mut Simulation) -> Outcome {
         max_overlap = max_overlap.max(gap.min(0.0).abs());
         max_ratio = max_ratio.max(energy(s) / e0);
         max_spin_ratio = max_spin_ratio.max(spin_energy(s) / e0);
+        on_step(s);
     });
     if let Err(e) = &result {
         failures.push(format!("the run stopped: {e}"));

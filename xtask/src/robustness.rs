@@ -1,0 +1,147 @@
+//! `cargo xtask robustness`: runs the paper's section 4 cases with every detector, judges
+//! each outcome (`dda_bench::verdict`), draws it, and writes `docs/robustness.md` with
+//! our verdicts beside the paper's.
+
+use dda::bench::{HARD_CASES, judge_collision_with};
+use dda::core::{RunOptions, Simulation};
+use dda::geom::DVec2;
+use dda::report::{frame_view, outcome_svg};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The detectors, as the paper names them and as `dda` does.
+const DETECTORS: [(&str, &str); 3] = [
+    ("type-1", "TB-CD-1"),
+    ("type-2", "TB-CD-2"),
+    ("cover", "CB-CD"),
+];
+
+/// The paper's verdict (section 4 text): true where it calls the result correct.
+fn paper_says(case: &str, detector: &str) -> bool {
+    match (case, detector) {
+        (_, "cover") => true,
+        ("4.1", "type-1") => false,
+        ("4.2", "type-2") => false,
+        ("4.3a" | "4.4a" | "4.4c", _) => false,
+        _ => true,
+    }
+}
+
+/// Runs the cases and writes `docs/robustness.md` and its pictures under `root`.
+pub fn run(root: &Path) -> Result<(), String> {
+    let docs = root.join("docs");
+    let pictures = docs.join("robustness");
+    std::fs::create_dir_all(&pictures).map_err(|e| format!("{}: {e}", pictures.display()))?;
+    let mut rows = String::new();
+    let (mut agree, mut total) = (0, 0);
+    let mut disagreements = Vec::new();
+    let mut cover_wrong = Vec::new();
+    for case in HARD_CASES {
+        for (detector, paper_name) in DETECTORS {
+            let mut scene = case.scene();
+            scene.analysis.detector = detector.into();
+            let model = scene
+                .validate()
+                .map_err(|e| format!("{}: {}", case.name(), e.message))?;
+            let mut sim = Simulation::new(model, RunOptions::default());
+            let view = frame_view(&sim);
+            let view = view.expanded(0.5 * view.size().max_element());
+            let start: Vec<_> = sim.blocks().iter().map(|b| b.polygon.clone()).collect();
+            let mut path = vec![sim.blocks()[0].polygon.centroid()];
+            let o = judge_collision_with(&mut sim, |s| path.push(s.blocks()[0].polygon.centroid()));
+            // Keep the path readable where a block flew off.
+            path.retain(|p: &DVec2| {
+                p.is_finite() && view.expanded(view.size().max_element()).contains(*p)
+            });
+            let file = format!("{}-{detector}.svg", case.name());
+            std::fs::write(
+                pictures.join(&file),
+                outcome_svg(&sim, &start, &path, &view),
+            )
+            .map_err(|e| format!("{file}: {e}"))?;
+            let paper = paper_says(case.case, detector);
+            if detector == "cover" && !o.permissible {
+                cover_wrong.push(case.case);
+            }
+            total += 1;
+            if paper == o.permissible {
+                agree += 1;
+            } else {
+                disagreements.push(format!("{} {paper_name}", case.case));
+            }
+            let word = |ok: bool| if ok { "right" } else { "wrong" };
+            let why = if o.failures.is_empty() {
+                String::new()
+            } else {
+                o.failures.join("; ")
+            };
+            let _ = writeln!(
+                rows,
+                "| {} | {paper_name} | {} | {} | {} | {:.3} | ({:.3}, {:.3}) | {} | [picture](robustness/{file}) |",
+                case.case,
+                word(paper),
+                word(o.permissible),
+                if paper == o.permissible {
+                    "yes"
+                } else {
+                    "**no**"
+                },
+                1e3 * o.max_overlap,
+                o.velocity[0],
+                o.velocity[1],
+                why,
+            );
+        }
+    }
+    let cover = if cover_wrong.is_empty() {
+        "The cover detector is right in every case, as in the paper.".to_string()
+    } else {
+        format!("The cover detector is wrong in {}.", cover_wrong.join(", "))
+    };
+    let md = format!(
+        "# Robustness: the paper's section 4 cases\n\n\
+         Written by `cargo xtask robustness` (do not edit by hand). Each of the paper's\n\
+         section 4 cases (geometry and choices in `crates/dda-bench/src/hard_cases.rs`,\n\
+         parameters of Tables 1 and 2) is run with each detector, and the outcome is judged\n\
+         by the criteria in `crates/dda-bench/src/verdict.rs`: the run completes without\n\
+         NaN; the blocks' geometric overlap stays below d_tol; A ends apart and moving away\n\
+         from B, or at rest on it; kinetic plus elastic energy never rises more than 1%;\n\
+         no spin beyond that energy. \"Paper\" is the paper's verdict from its text.\n\n\
+         **{agree} of {total} verdicts agree with the paper.** {cover}\n\n\
+         | case | detector | paper | ours | agree | max overlap (mm) | final velocity of A (m/s) | criteria not met | |\n\
+         |---|---|---|---|---|---|---|---|---|\n{rows}\n\
+         In the pictures the dashed outlines are the blocks at the start, the filled ones\n\
+         at the end, and the red line is the path of A's centroid.\n\n\
+         ## Where we disagree\n\n\
+         Disagreements: {}.\n\n\
+         Why we think they differ:\n\n\
+         - **Geometry.** The paper gives its blocks only as figures (14-17). Ours match every\n\
+           number in its text (11.4 deg tips, 18 edges of 0.35 m, 0.02 m edges, speeds), but\n\
+           not the sizes, offsets and approach angles, and a type-based detector fails only\n\
+           where a wrong vertex-edge pair falls within d_tol of the contact at the moment of\n\
+           impact. A failure of the paper's that we do not reproduce needs the paper's exact\n\
+           configuration, which the text does not give.\n\
+         - **Energy and penetration in 4.4c.** We made block A small (7.2 kg) so that the\n\
+           penalty of 3e6 N/m can stop it within d_tol = 0.01 m at all (90 J over 7.7 mm).\n\
+           A block over 12 kg at 5 m/s could not be stopped within d_tol by any detector\n\
+           (p d_tol^2 / 2 = 150 J); ours is stopped within it, so the type-based detectors\n\
+           do not lose the contact either.\n\
+         - **4.1 TB-CD-2.** The paper found TB-CD-2 right here; ours throws A back up,\n\
+           spinning, with several times its initial energy (see the picture). We have not\n\
+           traced which territory decision causes it; it is the first thing to look at\n\
+           when the type-based detectors are revisited.\n\n\
+         Reproduce: `cargo xtask robustness` (a few seconds).\n",
+        if disagreements.is_empty() {
+            "none".to_string()
+        } else {
+            disagreements.join(", ")
+        }
+    );
+    let path = docs.join("robustness.md");
+    std::fs::write(&path, md).map_err(|e| format!("{}: {e}", path.display()))?;
+    println!(
+        "wrote {} ({agree} of {total} verdicts agree with the paper)",
+        path.display()
+    );
+    Ok(())
+}
