@@ -149,6 +149,56 @@ fn bad_input_exits_2_names_file_key_line_and_writes_nothing() {
     }
     assert!(!out.exists(), "bad input must not write outputs");
     assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1, "only bad.toml");
+    // Geometry and setup errors found after parsing: exit 2 naming the key, nothing
+    // written.
+    let slider = "vertices = [[0.0, 1.0], [1.0, 1.0], [1.0, 2.0], [0.0, 2.0]]";
+    let good = std::fs::read_to_string(SCENE).unwrap();
+    for (name, text, key) in [
+        (
+            "clockwise.toml",
+            good.replace(
+                slider,
+                "vertices = [[0.0, 1.0], [0.0, 2.0], [1.0, 2.0], [1.0, 1.0]]",
+            ),
+            "blocks[1].vertices",
+        ),
+        (
+            "overlap.toml",
+            good.replace(
+                slider,
+                "vertices = [[0.0, 0.5], [1.0, 0.5], [1.0, 1.5], [0.0, 1.5]]",
+            ),
+            "blocks[1].vertices",
+        ),
+        (
+            "static.toml",
+            good.replace("mode = \"dynamic\"", "mode = \"static\"")
+                .replace(
+                    slider,
+                    "vertices = [[0.0, 3.0], [1.0, 3.0], [1.0, 4.0], [0.0, 4.0]]",
+                ),
+            "blocks[1]",
+        ),
+    ] {
+        let file = dir.join(name);
+        std::fs::write(&file, &text).unwrap();
+        for args in [
+            vec![
+                "run",
+                file.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            vec!["check", file.to_str().unwrap()],
+        ] {
+            let o = dda(&args);
+            assert_eq!(o.status.code(), Some(2), "{name}");
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert!(err.contains(&format!("{name}:")), "{err}");
+            assert!(err.contains(key), "{err}");
+        }
+        assert!(!out.exists(), "{name}: bad input must not write outputs");
+    }
     let o = dda(&["run", dir.join("missing.toml").to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2));
     let o = dda(&["run", "no-such-builtin"]);

@@ -94,19 +94,22 @@ pub fn resolve_scene(name: Option<&str>) -> Result<Scene, BadInput> {
     })
 }
 
-/// Validates `scene`, naming `source` (the file or built-in) in errors.
+/// Validates `scene`, naming `source` (the file or built-in) in errors; prints its
+/// warnings on stderr.
 pub fn validate(scene: &Scene, source: &str) -> Result<Model, BadInput> {
-    scene.validate().map_err(|v| {
-        BadInput(
-            SceneError {
-                file: source.to_string(),
-                key: v.key,
-                line: None,
-                message: v.message,
-            }
-            .to_string(),
-        )
-    })
+    let at = |key: String, message: String| SceneError {
+        file: source.to_string(),
+        key,
+        line: None,
+        message,
+    };
+    let model = scene
+        .validate()
+        .map_err(|v| BadInput(at(v.key, v.message).to_string()))?;
+    for w in &model.warnings {
+        eprintln!("warning: {}", at(w.key.clone(), w.message.clone()));
+    }
+    Ok(model)
 }
 
 fn check(name: &str) -> Result<ExitCode, BadInput> {

@@ -3,7 +3,7 @@
 //! values are errors naming the file, the key path and the line.
 
 use crate::locate::{LineIndex, line_at};
-use dda_geom::{ConvexPolygon, DVec2, PolygonError};
+use dda_geom::{ConvexPolygon, DVec2, PolygonError, PolygonOptions, separation};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -420,6 +420,22 @@ impl Scene {
             })?;
             blocks.push(b.validate(&key, material)?);
         }
+        check_start_overlaps(&blocks)?;
+        if params.mode == Mode::Static {
+            check_static_support(&blocks, params.d_tol)?;
+        }
+        let mut warnings = Vec::new();
+        if params.d_tol < 2.0 * params.d_max {
+            warnings.push(invalid(
+                "analysis.contact_tolerance",
+                format!(
+                    "{} m is below twice the max displacement ({} m): contacts may be \
+                     missed within a step (paper section 2.6)",
+                    params.d_tol,
+                    2.0 * params.d_max
+                ),
+            ));
+        }
         Ok(Model {
             name: self.name.clone(),
             params,
@@ -427,6 +443,7 @@ impl Scene {
             joints,
             joint_of,
             blocks,
+            warnings,
         })
     }
 }
@@ -455,6 +472,74 @@ fn strip_position(msg: &str) -> String {
     match msg.rfind(" at line ") {
         Some(i) => msg[..i].to_string(),
         None => msg.to_string(),
+    }
+}
+
+/// Rejects blocks that overlap at the start (beyond rounding: blocks cut from one rock
+/// share faces exactly); two fixed blocks may overlap, as they never interact.
+fn check_start_overlaps(blocks: &[ModelBlock]) -> Result<(), Invalid> {
+    let boxes: Vec<_> = blocks.iter().map(|b| b.polygon.aabb()).collect();
+    let mut pairs = Vec::new();
+    dda_contact::neighbour_pairs(&boxes, 0.0, &mut pairs);
+    for q in &pairs {
+        let (a, b) = (&blocks[q.a as usize], &blocks[q.b as usize]);
+        if a.fixed && b.fixed {
+            continue;
+        }
+        let (gap, _) = separation(&a.polygon, &b.polygon);
+        let size = a.polygon.diameter().max(b.polygon.diameter());
+        if gap < -1e-9 * size {
+            return Err(invalid(
+                format!("blocks[{}].vertices", q.b),
+                format!(
+                    "block `{}` overlaps block `{}` by {:.3e} m at the start",
+                    b.id, a.id, -gap
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// In a static analysis every free block must rest, through blocks within d_tol of each
+/// other, on a fixed block or a fixed point: a free-floating block has no equilibrium
+/// (the classic static DDA matrix is singular for it).
+fn check_static_support(blocks: &[ModelBlock], d_tol: f64) -> Result<(), Invalid> {
+    let boxes: Vec<_> = blocks.iter().map(|b| b.polygon.aabb()).collect();
+    let mut pairs = Vec::new();
+    dda_contact::neighbour_pairs(&boxes, d_tol, &mut pairs);
+    let mut supported: Vec<bool> = blocks
+        .iter()
+        .map(|b| b.fixed || !b.fixed_points.is_empty())
+        .collect();
+    let near: Vec<(usize, usize)> = pairs
+        .iter()
+        .map(|q| (q.a as usize, q.b as usize))
+        .filter(|&(a, b)| separation(&blocks[a].polygon, &blocks[b].polygon).0 <= d_tol)
+        .collect();
+    // Spread support until nothing changes (at most one pass per block).
+    let mut changed = true;
+    while changed {
+        changed = false;
+        for &(a, b) in &near {
+            if supported[a] != supported[b] {
+                supported[a] = true;
+                supported[b] = true;
+                changed = true;
+            }
+        }
+    }
+    match supported.iter().position(|s| !s) {
+        Some(i) => Err(invalid(
+            format!("blocks[{i}]"),
+            format!(
+                "static analysis: block `{}` rests on no fixed block or fixed point \
+                 (directly or through touching blocks), so it has no equilibrium; fix it, \
+                 give it fixed points, or use mode = \"dynamic\"",
+                blocks[i].id
+            ),
+        )),
+        None => Ok(()),
     }
 }
 
@@ -615,11 +700,11 @@ impl Material {
             }
         };
         let nu = match self.poisson {
-            Some(nu) if nu.is_finite() && (0.0..0.5).contains(&nu) => nu,
+            Some(nu) if nu.is_finite() && nu > -1.0 && nu < 0.5 => nu,
             Some(nu) => {
                 return Err(invalid(
                     format!("{key}.poisson"),
-                    format!("must be in [0, 0.5), got {nu}"),
+                    format!("must be in (-1, 0.5), got {nu}"),
                 ));
             }
             None => {
@@ -710,15 +795,19 @@ impl BlockSpec {
         for (i, v) in self.vertices.iter().enumerate() {
             finite_vec(&format!("{key}.vertices[{i}]"), v)?;
         }
-        let polygon = ConvexPolygon::from_coords(&self.vertices).map_err(|e| {
-            let at = match e {
-                PolygonError::DuplicateVertex { vertex, .. }
-                | PolygonError::CollinearVertex { vertex }
-                | PolygonError::NotConvex { vertex } => format!("{key}.vertices[{vertex}]"),
-                _ => format!("{key}.vertices"),
-            };
-            invalid(at, format!("block `{}`: {e}", self.id))
-        })?;
+        // Strict: clockwise order and collinear vertices are reported, not repaired.
+        let coords: Vec<DVec2> = self.vertices.iter().map(|&c| DVec2::from(c)).collect();
+        let polygon = ConvexPolygon::with_options(coords, &PolygonOptions::strict())
+            .map(|(p, _)| p)
+            .map_err(|e| {
+                let at = match e {
+                    PolygonError::DuplicateVertex { vertex, .. }
+                    | PolygonError::CollinearVertex { vertex }
+                    | PolygonError::NotConvex { vertex } => format!("{key}.vertices[{vertex}]"),
+                    _ => format!("{key}.vertices"),
+                };
+                invalid(at, format!("block `{}`: {e}", self.id))
+            })?;
         let mut velocity = [0.0; 6];
         if let Some(v) = &self.velocity {
             finite_vec(&format!("{key}.velocity"), v)?;
@@ -773,6 +862,8 @@ pub struct Model {
     pub joint_of: Vec<u16>,
     /// Blocks in scene order.
     pub blocks: Vec<ModelBlock>,
+    /// What is allowed but suspect (key and message), for the user to see.
+    pub warnings: Vec<Invalid>,
 }
 
 impl Model {

@@ -118,6 +118,147 @@ fn missing_material_and_duplicate_id() {
     assert_eq!(e.key, "blocks[1].id", "{e}");
 }
 
+/// Line (1-based) of the `n`th line (from 0) of `text` starting with `from`.
+fn nth_line_of(text: &str, from: &str, n: usize) -> usize {
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| l.starts_with(from))
+        .nth(n)
+        .expect("line present")
+        .0
+        + 1
+}
+
+/// Every kind of bad input the issue lists is refused with its key and its line (TOML).
+#[test]
+fn every_bad_input_names_key_and_line() {
+    const SLIDER: &str = "vertices = [[0.0, 1.0]";
+    let cases: [(&str, &str, &str, &str); 14] = [
+        // (what, line to replace, replacement, expected key)
+        (
+            "clockwise",
+            SLIDER,
+            "vertices = [[0.0, 1.0], [0.0, 2.0], [1.0, 2.0], [1.0, 1.0]]",
+            "blocks[1].vertices",
+        ),
+        (
+            "duplicate vertex",
+            SLIDER,
+            "vertices = [[0.0, 1.0], [1.0, 1.0], [1.0, 1.0], [1.0, 2.0], [0.0, 2.0]]",
+            "blocks[1].vertices[2]",
+        ),
+        (
+            "collinear vertex",
+            SLIDER,
+            "vertices = [[0.0, 1.0], [0.5, 1.0], [1.0, 1.0], [1.0, 2.0], [0.0, 2.0]]",
+            "blocks[1].vertices[1]",
+        ),
+        (
+            "fewer than 3 vertices",
+            SLIDER,
+            "vertices = [[0.0, 1.0], [1.0, 1.0]]",
+            "blocks[1].vertices",
+        ),
+        (
+            "NaN vertex",
+            SLIDER,
+            "vertices = [[0.0, 1.0], [1.0, nan], [1.0, 2.0], [0.0, 2.0]]",
+            "blocks[1].vertices[1]",
+        ),
+        (
+            "zero area",
+            SLIDER,
+            "vertices = [[0.0, 1.0], [1.0, 1.0], [2.0, 1.0]]",
+            "blocks[1].vertices",
+        ),
+        ("E <= 0", "young", "young = 0.0", "materials.rock.young"),
+        (
+            "nu <= -1",
+            "poisson",
+            "poisson = -1.0",
+            "materials.rock.poisson",
+        ),
+        (
+            "nu >= 0.5",
+            "poisson",
+            "poisson = 0.5",
+            "materials.rock.poisson",
+        ),
+        (
+            "density <= 0",
+            "density",
+            "density = -2600.0",
+            "materials.rock.density",
+        ),
+        (
+            "time step <= 0",
+            "time_step",
+            "time_step = 0.0",
+            "analysis.time_step",
+        ),
+        (
+            "blocks overlapping at the start",
+            SLIDER,
+            "vertices = [[0.0, 0.5], [1.0, 0.5], [1.0, 1.5], [0.0, 1.5]]",
+            "blocks[1].vertices",
+        ),
+        (
+            "unknown material",
+            "material = \"rock\"",
+            "material = \"granite\"",
+            "blocks[0].material",
+        ),
+        ("unknown key", "frames", "frame = 2", "analysis"),
+    ];
+    for (what, from, to, key) in cases {
+        let text = edit(from, to);
+        let e = error(&text);
+        assert!(e.key.starts_with(key), "{what}: {e}");
+        let line = if to.starts_with("frame =") {
+            line_of(&text, "frame =")
+        } else {
+            line_of(&text, to)
+        };
+        assert_eq!(e.line, Some(line), "{what}: {e}");
+    }
+    // A negative Poisson's ratio above -1 is valid.
+    assert!(Scene::parse(&edit("poisson", "poisson = -0.2"), Format::Toml, "s.toml").is_ok());
+}
+
+/// A static scene with a block resting on nothing is refused (its equilibrium is
+/// singular), naming the block's table.
+#[test]
+fn static_scene_with_a_free_block_is_refused() {
+    let text = edit("mode", "mode = \"static\"").replace(
+        SLIDER_LINE,
+        "vertices = [[0.0, 3.0], [1.0, 3.0], [1.0, 4.0], [0.0, 4.0]]",
+    );
+    let e = error(&text);
+    assert_eq!(e.key, "blocks[1]", "{e}");
+    assert_eq!(e.line, Some(nth_line_of(&text, "[[blocks]]", 1)), "{e}");
+    assert!(e.message.contains("slider"), "{e}");
+    // Resting on the base, it is accepted.
+    let resting = edit("mode", "mode = \"static\"");
+    assert!(Scene::parse(&resting, Format::Toml, "s.toml").is_ok());
+}
+
+/// A contact tolerance below twice the max displacement is a warning, not an error.
+#[test]
+fn small_contact_tolerance_warns() {
+    let (_, model) = Scene::parse(
+        &edit("contact_tolerance", "contact_tolerance = 0.0015"),
+        Format::Toml,
+        "s.toml",
+    )
+    .expect("accepted");
+    assert_eq!(model.warnings.len(), 1);
+    assert_eq!(model.warnings[0].key, "analysis.contact_tolerance");
+    let (_, model) = Scene::parse(GOOD, Format::Toml, "s.toml").expect("valid");
+    assert!(model.warnings.is_empty());
+}
+
+const SLIDER_LINE: &str = "vertices = [[0.0, 1.0], [1.0, 1.0], [1.0, 2.0], [0.0, 2.0]]";
+
 #[test]
 fn syntax_error_has_a_line() {
     let text = edit("gravity", "gravity = [0.0, -9.81");

@@ -29,6 +29,7 @@ pub use self::measures::{
 };
 pub use self::polygon::{
     ConvexPolygon, DEFAULT_REL_TOL, Moments, Motion, PolygonOptions, Repairs, displace_point,
+    separation,
 };
 
 /// 2D vector type used throughout (glam's `DVec2`, f64).

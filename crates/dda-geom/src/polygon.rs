@@ -482,9 +482,55 @@ impl Motion {
     }
 }
 
+/// Signed separation of two convex polygons by separating axes: the largest gap over
+/// the edge normals of both (positive: apart by at least that much; negative: the
+/// least overlap), and the axis it is along, pointing from `b` to `a`.
+pub fn separation(a: &ConvexPolygon, b: &ConvexPolygon) -> (f64, DVec2) {
+    let mut best = (f64::NEG_INFINITY, DVec2::Y);
+    for (p, q, flip) in [(a, b, -1.0), (b, a, 1.0)] {
+        for i in 0..p.len() {
+            let n = p.normal(i);
+            let (lo_q, _) = extent_along(q, n);
+            let (_, hi_p) = extent_along(p, n);
+            // q beyond p's face i by lo_q - hi_p along p's outward normal n.
+            let gap = lo_q - hi_p;
+            if gap > best.0 {
+                best = (gap, flip * n);
+            }
+        }
+    }
+    best
+}
+
+/// The range of `n . x` over a polygon.
+fn extent_along(p: &ConvexPolygon, n: DVec2) -> (f64, f64) {
+    p.vertices()
+        .iter()
+        .map(|v| n.dot(*v))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+            (lo.min(x), hi.max(x))
+        })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Separation of unit squares: apart, touching, overlapping, with the axis from b to a.
+    #[test]
+    fn separation_of_squares() {
+        let square = |x: f64, y: f64| {
+            ConvexPolygon::from_coords(&[[x, y], [x + 1.0, y], [x + 1.0, y + 1.0], [x, y + 1.0]])
+                .expect("square")
+        };
+        let b = square(0.0, 0.0);
+        let (gap, n) = separation(&square(0.0, 1.5), &b);
+        assert!((gap - 0.5).abs() < 1e-12 && (n - DVec2::Y).length() < 1e-12);
+        let (gap, n) = separation(&square(-1.25, 0.0), &b);
+        assert!((gap - 0.25).abs() < 1e-12 && (n + DVec2::X).length() < 1e-12);
+        let (gap, _) = separation(&square(0.0, 0.9), &b);
+        assert!((gap + 0.1).abs() < 1e-12);
+    }
 
     fn square() -> Vec<DVec2> {
         vec![
