@@ -89,14 +89,7 @@ pub fn column_scene(name: &str, blocks: &[ConvexPolygon], analysis: Analysis) ->
     Scene {
         name: name.into(),
         analysis,
-        materials: BTreeMap::from([(
-            "rock".into(),
-            Material {
-                density: 2600.0,
-                young: Some(1e9),
-                poisson: Some(0.3),
-            },
-        )]),
+        materials: rock(2600.0, 1e9, 0.3),
         joints: BTreeMap::from([("default".into(), Joint::default())]),
         blocks: specs,
     }
@@ -129,4 +122,16 @@ pub fn paper_analysis(
         max_oci: 6,
         frames: 10,
     }
+}
+
+/// The materials of a one-rock scene: `rock` with this density, E and nu.
+pub(crate) fn rock(density: f64, young: f64, poisson: f64) -> BTreeMap<String, Material> {
+    BTreeMap::from([(
+        "rock".into(),
+        Material {
+            density,
+            young: Some(young),
+            poisson: Some(poisson),
+        },
+    )])
 }

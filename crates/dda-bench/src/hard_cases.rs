@@ -22,9 +22,9 @@
 //!   the contact tolerance: its kinetic energy, 7.2 kg at 5 m/s, is 90 J, and a spring of
 //!   3e6 N/m takes it up over 7.7 mm < d_tol = 10 mm.
 
-use crate::column::paper_analysis;
+use crate::column::{paper_analysis, rock};
 use dda_core::Scene;
-use dda_core::scene::{BlockSpec, Joint, Material};
+use dda_core::scene::{Analysis, BlockSpec, Joint};
 use std::collections::BTreeMap;
 
 /// One of the paper's section 4 cases: its name, Table 1 or 2's parameters, and the
@@ -141,20 +141,12 @@ impl HardCase {
     /// The scene: A moving at `speed` in -y onto fixed B.
     pub fn scene(&self) -> Scene {
         let [a, b] = (self.geometry)();
-        let block = |id: &str, vertices: Vec<[f64; 2]>, fixed: bool| BlockSpec {
-            id: id.into(),
-            material: "rock".into(),
-            vertices,
-            fixed,
-            velocity: (!fixed).then_some([0.0, -self.speed]),
-            angular_velocity: None,
-            stress: None,
-            loads: Vec::new(),
-            fixed_points: Vec::new(),
-        };
-        Scene {
-            name: self.name(),
-            analysis: paper_analysis(
+        collision_scene(
+            &self.name(),
+            a,
+            b,
+            [0.0, -self.speed],
+            paper_analysis(
                 self.duration,
                 self.time_step,
                 self.max_displacement,
@@ -162,17 +154,36 @@ impl HardCase {
                 self.penalty,
                 None,
             ),
-            materials: BTreeMap::from([(
-                "rock".into(),
-                Material {
-                    density: 2000.0,
-                    young: Some(1e9),
-                    poisson: Some(0.25),
-                },
-            )]),
-            joints: BTreeMap::from([("default".into(), Joint::default())]),
-            blocks: vec![block("A", a, false), block("B", b, true)],
-        }
+        )
+    }
+}
+
+/// A scene of block A (vertices `a`, moving at `velocity`) and fixed block B, both of the
+/// rock of section 4 (density 2000 kg/m^3, E = 1 GPa, nu = 0.25), frictionless.
+pub fn collision_scene(
+    name: &str,
+    a: Vec<[f64; 2]>,
+    b: Vec<[f64; 2]>,
+    velocity: [f64; 2],
+    analysis: Analysis,
+) -> Scene {
+    let block = |id: &str, vertices: Vec<[f64; 2]>, fixed: bool| BlockSpec {
+        id: id.into(),
+        material: "rock".into(),
+        vertices,
+        fixed,
+        velocity: (!fixed).then_some(velocity),
+        angular_velocity: None,
+        stress: None,
+        loads: Vec::new(),
+        fixed_points: Vec::new(),
+    };
+    Scene {
+        name: name.into(),
+        analysis,
+        materials: rock(2000.0, 1e9, 0.25),
+        joints: BTreeMap::from([("default".into(), Joint::default())]),
+        blocks: vec![block("A", a, false), block("B", b, true)],
     }
 }
 

@@ -31,6 +31,13 @@
 //!   and the cost stays flat as d_tol grows.
 //! - The distance filter runs before the entrance filter (both must pass; the cheaper
 //!   rejection first).
+//! - A cover closed at the end of a step stays a candidate (active, its state inherited)
+//!   while its vertex is over the edge and behind it, even deeper than d_tol, where the
+//!   distance filter (eq. 10) would drop it: with a small penalty a penetration can
+//!   exceed d_tol, and dropping the contact then lets the blocks pass through each other
+//!   (found by the hard-pair property tests: a 3 deg wedge at 1 m/s with p = 1e6 and
+//!   d_tol = 1.2 mm went through a 15 deg wedge). The type-based detectors keep the
+//!   paper's behaviour.
 
 use crate::contact::{Contact, ContactKey};
 use crate::detector::{ContactDetector, DetectionParams};
@@ -222,6 +229,10 @@ impl ContactDetector for CoverDetector {
 
     fn activates(&self, start: VertexEdge, trial: VertexEdge) -> bool {
         tracking::enters_through(start, trial)
+    }
+
+    fn keeps_closed_contacts(&self) -> bool {
+        true
     }
 }
 

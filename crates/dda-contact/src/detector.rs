@@ -61,6 +61,13 @@ pub trait ContactDetector: Send + Sync + fmt::Debug {
         false
     }
 
+    /// Whether a contact closed at the end of the previous step stays a candidate while
+    /// its vertex is still over the edge and behind it, however deep (beyond d_tol, where
+    /// the distance filter would drop it).
+    fn keeps_closed_contacts(&self) -> bool {
+        false
+    }
+
     /// Whether an inactive candidate becomes active, given its measures at step start and
     /// after the trial displacement.
     fn activates(&self, _start: VertexEdge, _trial: VertexEdge) -> bool {
@@ -117,6 +124,10 @@ fn detect_range(
             params,
             list,
         );
+        let before = previous.with_pair(pair);
+        if detector.keeps_closed_contacts() {
+            keep_closed(shapes, before, start, list);
+        }
         if list.len() == start {
             continue;
         }
@@ -124,7 +135,6 @@ fn detect_range(
         mine.sort_unstable_by_key(|c| c.key);
         // Inherit the closed state (locked or sliding), the locked point and the cohesion
         // of the same vertex-edge pair at the end of the previous step (paper 2.3.1).
-        let before = previous.with_pair(pair);
         let mut j = 0;
         for c in mine.iter_mut() {
             // Both lists are sorted by key: walk them together.
@@ -146,6 +156,33 @@ fn detect_range(
             start: start as u32,
             end: list.len() as u32,
         });
+    }
+}
+
+/// Appends, as active candidates, the contacts closed at the end of the previous step
+/// (`before`, sorted) that the detector did not list (those at `list[start..]`) but whose
+/// vertex is still over its edge (0 <= r <= 1) and behind it (d_n < 0): a penetration
+/// deeper than d_tol, which a small penalty allows, must keep pushing the blocks apart
+/// rather than let them pass through each other. States are inherited after.
+fn keep_closed(shapes: &[BlockShape], before: &[Contact], start: usize, list: &mut Vec<Contact>) {
+    let listed = list.len();
+    for old in before.iter().filter(|o| o.active && o.state.is_closed()) {
+        if list[start..listed].iter().any(|c| c.key == old.key) {
+            continue;
+        }
+        let k = old.key;
+        let (vs, es) = (
+            &shapes[k.vertex_block as usize],
+            &shapes[k.edge_block as usize],
+        );
+        let m = VertexEdge::new(
+            vs.vertices[k.vertex as usize],
+            es.vertices[k.edge as usize],
+            es.vertices[es.next(k.edge as usize)],
+        );
+        if m.d_n < 0.0 && (0.0..=1.0).contains(&m.r) {
+            list.push(Contact::new(k, m.d_n, m.r, true));
+        }
     }
 }
 
