@@ -2,8 +2,11 @@
 //!
 //! - `robustness`: the paper's section 4 cases with every detector, judged and drawn, into
 //!   `docs/robustness.md`.
+//! - `sweep`: the paper's section 5 columns over detectors and r_tol: steps, OCI cycles,
+//!   seconds and accuracy as CSV, JSON, a table and plots.
 
 mod robustness;
+mod sweep;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -19,7 +22,7 @@ fn main() -> ExitCode {
     match task.as_deref() {
         None | Some("help" | "--help" | "-h") => {
             println!(
-                "usage: cargo xtask <task>\n\ntasks:\n  robustness   section 4 cases x detectors -> docs/robustness.md"
+                "usage: cargo xtask <task>\n\ntasks:\n  robustness   section 4 cases x detectors -> docs/robustness.md\n  sweep [--models 20,93,229,826] [--detectors cover,type-1,type-2] [--rtol 1,2,4,6,8,10] [--jobs N] [--max-steps N] [--out DIR]"
             );
             ExitCode::SUCCESS
         }
@@ -30,6 +33,17 @@ fn main() -> ExitCode {
                 ExitCode::FAILURE
             }
         },
+        Some("sweep") => {
+            let args: Vec<String> = std::env::args().skip(2).collect();
+            let result = sweep::parse(&args).and_then(|o| sweep::run(&root(), &o));
+            match result {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("xtask sweep: {e}");
+                    ExitCode::from(2)
+                }
+            }
+        }
         Some(other) => {
             eprintln!("xtask: unknown task `{other}` (try `cargo xtask help`)");
             ExitCode::from(2)

@@ -52,7 +52,7 @@ pub fn judge_collision(sim: &mut Simulation) -> Outcome {
 /// [`judge_collision`], calling `on_step` after every step (to record a trajectory).
 pub fn judge_collision_with(sim: &mut Simulation, mut on_step: impl FnMut(&Simulation)) -> Outcome {
     let d_tol = sim.model().params.d_tol;
-    let e0 = energy(sim).max(f64::MIN_POSITIVE);
+    let e0 = mechanical_energy(sim).max(f64::MIN_POSITIVE);
     let v0 = speed(sim);
     let mut failures = Vec::new();
     let mut max_overlap = 0.0f64;
@@ -65,7 +65,7 @@ pub fn judge_collision_with(sim: &mut Simulation, mut on_step: impl FnMut(&Simul
         let gap = separation(a, b).0;
         gaps = [gaps[1], gap];
         max_overlap = max_overlap.max(gap.min(0.0).abs());
-        max_ratio = max_ratio.max(energy(s) / e0);
+        max_ratio = max_ratio.max(mechanical_energy(s) / e0);
         max_spin_ratio = max_spin_ratio.max(spin_energy(s) / e0);
         on_step(s);
     });
@@ -125,16 +125,18 @@ fn speed(sim: &Simulation) -> f64 {
     DVec2::new(v[0], v[1]).length()
 }
 
-/// Kinetic energy plus the strain energy of the free blocks' stresses (plane stress:
-/// area / (2E) (sx^2 + sy^2 - 2 nu sx sy + 2 (1 + nu) txy^2)).
-fn energy(sim: &Simulation) -> f64 {
+/// Mechanical energy of the free blocks: kinetic, plus strain energy of their stresses
+/// (plane stress: area / (2E) (sx^2 + sy^2 - 2 nu sx sy + 2 (1 + nu) txy^2)), plus the
+/// potential energy of gravity (-m g . centroid) when the scene has gravity.
+pub fn mechanical_energy(sim: &Simulation) -> f64 {
     let model = sim.model();
     let kinetic = if model.params.mode == Mode::Dynamic {
         sim.kinetic_energy()
     } else {
         0.0
     };
-    let elastic: f64 = sim
+    let g = model.params.gravity.unwrap_or_default();
+    let rest: f64 = sim
         .blocks()
         .iter()
         .zip(&model.blocks)
@@ -143,15 +145,17 @@ fn energy(sim: &Simulation) -> f64 {
             let mat = model.materials[m.material];
             let [sx, sy, txy] = b.stress;
             let (e, nu) = (mat.young, mat.poisson);
-            if e > 0.0 {
-                b.polygon.area() / (2.0 * e)
+            let area = b.polygon.area();
+            let strain = if e > 0.0 {
+                area / (2.0 * e)
                     * (sx * sx + sy * sy - 2.0 * nu * sx * sy + 2.0 * (1.0 + nu) * txy * txy)
             } else {
                 0.0
-            }
+            };
+            strain - mat.density * area * g.dot(b.polygon.centroid())
         })
         .sum();
-    kinetic + elastic
+    kinetic + rest
 }
 
 /// Rotational kinetic energy of block 0, 1/2 rho J omega^2.

@@ -1,0 +1,535 @@
+//! `cargo xtask sweep`: the paper's section 5 columns run over detectors and contact
+//! tolerance ratios r_tol (eq. 15), reporting steps, OCI cycles, seconds by phase and
+//! accuracy together: `sweep.csv`, `sweep.json`, a table in the layout of the paper's
+//! Tables 4 and 5, and SVG plots.
+//!
+//! Runs are independent and each is deterministic, so the results do not depend on
+//! `--jobs`; only the seconds do (two runs at once on two cores share them, so timing
+//! sweeps use `--jobs 1`, the default). A run still going after `--max-steps` steps
+//! (default 5,000, nearly four times the paper's longest run) is stopped and counted as
+//! not permissible, so that a detector whose time step collapses cannot hold up a sweep.
+
+use dda::bench::{PAPER_COLUMNS, mechanical_energy};
+use dda::core::{RunOptions, Simulation};
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// What one run did.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    /// Block count of the paper's column (20, 93, 229, 826).
+    pub model: usize,
+    /// Detector name.
+    pub detector: String,
+    /// Contact tolerance ratio.
+    pub r_tol: f64,
+    /// Completed steps.
+    pub steps: u64,
+    /// OCI iterations (cycles).
+    pub oci_cycles: u64,
+    /// Wall seconds in contact detection.
+    pub detection_s: f64,
+    /// Wall seconds in assembly.
+    pub assembly_s: f64,
+    /// Wall seconds in factorisation and solves.
+    pub solve_s: f64,
+    /// Wall seconds of the whole run.
+    pub total_s: f64,
+    /// Largest penetration of a closed contact, m.
+    pub max_penetration: f64,
+    /// Largest rise of mechanical energy (kinetic + strain + gravity) above its initial
+    /// value, over the column's potential energy scale m g H.
+    pub energy_error: f64,
+    /// Permissible: completed, finite, penetration below d_tol, energy rise under 1%.
+    pub verdict: bool,
+    /// Why the run stopped early, if it did.
+    pub error: Option<String>,
+}
+
+/// Options of a sweep.
+pub struct Options {
+    /// Block counts of the columns to run.
+    pub models: Vec<usize>,
+    /// Detectors.
+    pub detectors: Vec<String>,
+    /// Contact tolerance ratios.
+    pub rtols: Vec<f64>,
+    /// Runs at once.
+    pub jobs: usize,
+    /// Steps after which a run is stopped and counted as failed.
+    pub max_steps: u64,
+    /// Output directory.
+    pub out: PathBuf,
+}
+
+/// Parses `--models 20,93 --detectors cover --rtol 1,2 --jobs N --out DIR`.
+pub fn parse(args: &[String]) -> Result<Options, String> {
+    let mut o = Options {
+        models: vec![20, 93, 229, 826],
+        detectors: vec!["cover".into(), "type-1".into(), "type-2".into()],
+        rtols: vec![1.0, 2.0, 4.0, 6.0, 8.0, 10.0],
+        jobs: 1,
+        max_steps: 5000,
+        out: PathBuf::from("runs/sweep"),
+    };
+    let mut it = args.iter();
+    while let Some(flag) = it.next() {
+        let value = it.next().ok_or_else(|| format!("`{flag}` needs a value"))?;
+        let list =
+            |v: &str| -> Vec<String> { v.split(',').map(|s| s.trim().to_string()).collect() };
+        match flag.as_str() {
+            "--models" => {
+                o.models = list(value)
+                    .iter()
+                    .map(|m| {
+                        m.parse()
+                            .map_err(|_| format!("--models: `{m}` is not a block count"))
+                    })
+                    .collect::<Result<_, _>>()?;
+            }
+            "--detectors" => o.detectors = list(value),
+            "--rtol" => {
+                o.rtols = list(value)
+                    .iter()
+                    .map(|r| match r.parse::<f64>() {
+                        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+                        _ => Err(format!("--rtol: `{r}` is not a positive number")),
+                    })
+                    .collect::<Result<_, _>>()?;
+            }
+            "--jobs" => {
+                o.jobs = value
+                    .parse()
+                    .ok()
+                    .filter(|&j| j > 0)
+                    .ok_or_else(|| format!("--jobs: `{value}` is not a positive count"))?;
+            }
+            "--out" => o.out = PathBuf::from(value),
+            "--max-steps" => {
+                o.max_steps = value
+                    .parse()
+                    .ok()
+                    .filter(|&n| n > 0)
+                    .ok_or_else(|| format!("--max-steps: `{value}` is not a positive count"))?;
+            }
+            other => return Err(format!("unknown option `{other}`")),
+        }
+    }
+    for m in &o.models {
+        if !PAPER_COLUMNS.iter().any(|c| c.blocks == *m) {
+            return Err(format!(
+                "--models: no paper column has {m} blocks (20, 93, 229, 826)"
+            ));
+        }
+    }
+    for d in &o.detectors {
+        dda::contact::detector_by_name(d).map_err(|e| format!("--detectors: {e}"))?;
+    }
+    Ok(o)
+}
+
+/// Runs one combination, stopping it after `max_steps` steps.
+fn run_one(model: usize, detector: &str, r_tol: f64, max_steps: u64) -> Row {
+    let column = PAPER_COLUMNS
+        .iter()
+        .find(|c| c.blocks == model)
+        .copied()
+        .unwrap_or(PAPER_COLUMNS[0]);
+    let mut scene = column.scene();
+    scene.analysis.detector = detector.into();
+    scene.scale_tolerances(r_tol);
+    let mut row = Row {
+        model,
+        detector: detector.into(),
+        r_tol,
+        steps: 0,
+        oci_cycles: 0,
+        detection_s: 0.0,
+        assembly_s: 0.0,
+        solve_s: 0.0,
+        total_s: 0.0,
+        max_penetration: 0.0,
+        energy_error: 0.0,
+        verdict: false,
+        error: None,
+    };
+    let m = match scene.validate() {
+        Ok(m) => m,
+        Err(e) => {
+            row.error = Some(format!("{}: {}", e.key, e.message));
+            return row;
+        }
+    };
+    let d_tol = m.params.d_tol;
+    // m g H: the column's potential energy scale.
+    let scale = m
+        .blocks
+        .iter()
+        .filter(|b| !b.fixed)
+        .map(|b| b.polygon.area())
+        .sum::<f64>()
+        * 2600.0
+        * 9.8
+        * 20.0;
+    let mut sim = Simulation::new(m, RunOptions::default());
+    let e0 = mechanical_energy(&sim);
+    let mut rise = 0.0f64;
+    let mut result = Ok(());
+    while !sim.finished() {
+        if sim.totals().steps >= max_steps {
+            result = Err(format!(
+                "stopped after {max_steps} steps at t = {:.4} s (--max-steps)",
+                sim.time()
+            ));
+            break;
+        }
+        match sim.step() {
+            Ok(_) => rise = rise.max(mechanical_energy(&sim) - e0),
+            Err(e) => {
+                result = Err(e.to_string());
+                break;
+            }
+        }
+    }
+    let t = sim.totals();
+    row.steps = t.steps;
+    row.oci_cycles = t.oci_iterations;
+    row.detection_s = t.detection_s;
+    row.assembly_s = t.assembly_s;
+    row.solve_s = t.solve_s;
+    row.total_s = t.total_s;
+    row.max_penetration = t.max_penetration;
+    row.energy_error = rise / scale;
+    let finite = sim
+        .blocks()
+        .iter()
+        .all(|b| b.velocity.iter().all(|v| v.is_finite()));
+    row.error = result.err();
+    row.verdict =
+        row.error.is_none() && finite && row.max_penetration < d_tol && row.energy_error <= 0.01;
+    row
+}
+
+/// Runs the sweep and writes its files; prints the table.
+pub fn run(root: &Path, o: &Options) -> Result<(), String> {
+    let out = root.join(&o.out);
+    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let mut combos = Vec::new();
+    for &m in &o.models {
+        for d in &o.detectors {
+            for &r in &o.rtols {
+                combos.push((m, d.clone(), r));
+            }
+        }
+    }
+    let bar = indicatif::ProgressBar::new(combos.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} runs, {elapsed} ({msg})")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let next = AtomicUsize::new(0);
+    let rows: Mutex<Vec<Option<Row>>> = Mutex::new(vec![None; combos.len()]);
+    std::thread::scope(|s| {
+        for _ in 0..o.jobs.min(combos.len()).max(1) {
+            s.spawn(|| {
+                loop {
+                    let i = next.fetch_add(1, Ordering::SeqCst);
+                    let Some((m, d, r)) = combos.get(i) else {
+                        break;
+                    };
+                    bar.set_message(format!("{m} blocks, {d}, r_tol {r}"));
+                    let row = run_one(*m, d, *r, o.max_steps);
+                    if bar.is_hidden() {
+                        // No terminal: one line per run, so a log shows progress.
+                        eprintln!(
+                            "{m} blocks, {d}, r_tol {r}: {} steps, {:.2} s",
+                            row.steps, row.total_s
+                        );
+                    }
+                    if let Ok(mut rows) = rows.lock() {
+                        rows[i] = Some(row);
+                    }
+                    bar.inc(1);
+                }
+            });
+        }
+    });
+    bar.finish_and_clear();
+    let rows: Vec<Row> = rows
+        .into_inner()
+        .map_err(|_| "a run panicked".to_string())?
+        .into_iter()
+        .flatten()
+        .collect();
+    write_files(&out, &rows)?;
+    println!("{}", table(&rows));
+    println!("wrote {}", out.display());
+    Ok(())
+}
+
+fn write_files(out: &Path, rows: &[Row]) -> Result<(), String> {
+    let mut csv = String::from(
+        "model,detector,r_tol,steps,oci_cycles,detection_s,assembly_s,solve_s,total_s,\
+         max_penetration,energy_error,verdict,error\n",
+    );
+    for r in rows {
+        let _ = writeln!(
+            csv,
+            "{},{},{},{},{},{:.4},{:.4},{:.4},{:.4},{:e},{:e},{},{}",
+            r.model,
+            r.detector,
+            r.r_tol,
+            r.steps,
+            r.oci_cycles,
+            r.detection_s,
+            r.assembly_s,
+            r.solve_s,
+            r.total_s,
+            r.max_penetration,
+            r.energy_error,
+            if r.verdict {
+                "permissible"
+            } else {
+                "not permissible"
+            },
+            r.error.as_deref().unwrap_or("").replace(',', ";")
+        );
+    }
+    let write = |name: &str, text: String| {
+        std::fs::write(out.join(name), text).map_err(|e| format!("{name}: {e}"))
+    };
+    write("sweep.csv", csv)?;
+    write(
+        "sweep.json",
+        serde_json::to_string_pretty(rows).map_err(|e| e.to_string())?,
+    )?;
+    write("speedup.svg", speedup_plot(rows))?;
+    write("steps.svg", counts_plot(rows))?;
+    write("accuracy.svg", accuracy_plot(rows))?;
+    Ok(())
+}
+
+/// The paper's Tables 4 and 5 layout: per model, total steps, OCI cycles and detection
+/// cost, one column per detector and r_tol.
+pub fn table(rows: &[Row]) -> String {
+    let mut cols: Vec<(String, f64)> = rows.iter().map(|r| (r.detector.clone(), r.r_tol)).collect();
+    cols.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    cols.dedup();
+    let mut models: Vec<usize> = rows.iter().map(|r| r.model).collect();
+    models.sort_unstable();
+    models.dedup();
+    let mut s = String::from("| model | quantity |");
+    for (d, r) in &cols {
+        let _ = write!(s, " {d} r_tol={r} |");
+    }
+    s.push_str("\n|---|---|");
+    s.push_str(&"---|".repeat(cols.len()));
+    s.push('\n');
+    let cell = |m: usize, d: &str, r: f64| {
+        rows.iter()
+            .find(|x| x.model == m && x.detector == d && x.r_tol == r)
+    };
+    for m in models {
+        for (q, f) in [
+            (
+                "total steps",
+                (|x: &Row| format!("{}", x.steps)) as fn(&Row) -> String,
+            ),
+            ("OCI cycles", |x: &Row| format!("{}", x.oci_cycles)),
+            ("CD cost (s)", |x: &Row| format!("{:.3}", x.detection_s)),
+            ("total (s)", |x: &Row| format!("{:.2}", x.total_s)),
+            ("permissible", |x: &Row| {
+                if x.verdict {
+                    "yes".into()
+                } else {
+                    "**no**".into()
+                }
+            }),
+        ] {
+            let _ = write!(s, "| {m} | {q} |");
+            for (d, r) in &cols {
+                let v = cell(m, d, *r).map(f).unwrap_or_else(|| "-".into());
+                let _ = write!(s, " {v} |");
+            }
+            s.push('\n');
+        }
+    }
+    s
+}
+
+/// A plot of named series of (x, y) points on linear axes, joined by lines if `lines`.
+fn plot(
+    title: &str,
+    xlabel: &str,
+    ylabel: &str,
+    series: &[(String, Vec<(f64, f64)>)],
+    lines: bool,
+) -> String {
+    let (w, h, m) = (640.0, 400.0, 60.0);
+    let pts = series.iter().flat_map(|(_, p)| p.iter());
+    let (mut x0, mut x1, mut y0, mut y1) =
+        (f64::INFINITY, f64::NEG_INFINITY, 0.0f64, f64::NEG_INFINITY);
+    for &(x, y) in pts {
+        x0 = x0.min(x);
+        x1 = x1.max(x);
+        y0 = y0.min(y);
+        y1 = y1.max(y);
+    }
+    // Empty or flat ranges (or NaN) get a unit span.
+    if x1.partial_cmp(&x0) != Some(std::cmp::Ordering::Greater) {
+        x1 = x0 + 1.0;
+    }
+    if y1.partial_cmp(&y0) != Some(std::cmp::Ordering::Greater) {
+        y1 = y0 + 1.0;
+    }
+    let sx = |x: f64| m + (x - x0) / (x1 - x0) * (w - 2.0 * m);
+    let sy = |y: f64| h - m - (y - y0) / (y1 - y0) * (h - 2.0 * m);
+    let colours = [
+        "#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b",
+    ];
+    let mut s = format!(
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" font-family="sans-serif" font-size="12">
+<rect width="{w}" height="{h}" fill="white"/>
+<text x="{}" y="20" text-anchor="middle" font-size="14">{title}</text>
+<line x1="{m}" y1="{}" x2="{}" y2="{}" stroke="black"/><line x1="{m}" y1="{m}" x2="{m}" y2="{}" stroke="black"/>
+<text x="{}" y="{}" text-anchor="middle">{xlabel}</text>
+<text x="15" y="{}" transform="rotate(-90 15 {})" text-anchor="middle">{ylabel}</text>
+<text x="{m}" y="{}" text-anchor="middle">{x0:.3}</text><text x="{}" y="{}" text-anchor="middle">{x1:.3}</text>
+<text x="{}" y="{}" text-anchor="end">{y0:.3}</text><text x="{}" y="{m}" text-anchor="end">{y1:.3}</text>
+"#,
+        w / 2.0,
+        h - m,
+        w - m,
+        h - m,
+        h - m,
+        w / 2.0,
+        h - 15.0,
+        h / 2.0,
+        h / 2.0,
+        h - m + 15.0,
+        w - m,
+        h - m + 15.0,
+        m - 5.0,
+        h - m,
+        m - 5.0,
+    );
+    for (k, (name, p)) in series.iter().enumerate() {
+        let c = colours[k % colours.len()];
+        if lines {
+            let line: Vec<String> = p
+                .iter()
+                .map(|&(x, y)| format!("{:.1},{:.1}", sx(x), sy(y)))
+                .collect();
+            let _ = writeln!(
+                s,
+                r#"<polyline fill="none" stroke="{c}" stroke-width="2" points="{}"/>"#,
+                line.join(" ")
+            );
+        }
+        for &(x, y) in p {
+            let _ = writeln!(
+                s,
+                r#"<circle cx="{:.1}" cy="{:.1}" r="3" fill="{c}"/>"#,
+                sx(x),
+                sy(y)
+            );
+        }
+        let _ = writeln!(
+            s,
+            r#"<text x="{}" y="{}" fill="{c}">{name}</text>"#,
+            w - m + 5.0 - 120.0,
+            m + 15.0 * k as f64
+        );
+    }
+    s.push_str("</svg>\n");
+    s
+}
+
+/// r_cd = T_type-2(r_tol = 1) / T_cover(r_tol) for each model (paper eq. 16, figs. 21, 25).
+fn speedup_plot(rows: &[Row]) -> String {
+    let mut series = Vec::new();
+    let mut models: Vec<usize> = rows.iter().map(|r| r.model).collect();
+    models.sort_unstable();
+    models.dedup();
+    for m in models {
+        let Some(base) = rows
+            .iter()
+            .find(|r| r.model == m && r.detector == "type-2" && r.r_tol == 1.0)
+        else {
+            continue;
+        };
+        let pts: Vec<(f64, f64)> = rows
+            .iter()
+            .filter(|r| r.model == m && r.detector == "cover" && r.detection_s > 0.0)
+            .map(|r| (r.r_tol, base.detection_s / r.detection_s))
+            .collect();
+        series.push((format!("{m} blocks"), pts));
+    }
+    plot(
+        "Detection speed-up r_cd = T_type-2 / T_cover",
+        "r_tol",
+        "r_cd",
+        &series,
+        true,
+    )
+}
+
+/// Steps and OCI cycles against r_tol, cover detector.
+fn counts_plot(rows: &[Row]) -> String {
+    let mut series = Vec::new();
+    let mut models: Vec<usize> = rows.iter().map(|r| r.model).collect();
+    models.sort_unstable();
+    models.dedup();
+    for m in models {
+        let cover: Vec<&Row> = rows
+            .iter()
+            .filter(|r| r.model == m && r.detector == "cover")
+            .collect();
+        series.push((
+            format!("{m}: steps"),
+            cover.iter().map(|r| (r.r_tol, r.steps as f64)).collect(),
+        ));
+        series.push((
+            format!("{m}: OCI"),
+            cover
+                .iter()
+                .map(|r| (r.r_tol, r.oci_cycles as f64))
+                .collect(),
+        ));
+    }
+    plot(
+        "Steps and OCI cycles (cover)",
+        "r_tol",
+        "count",
+        &series,
+        true,
+    )
+}
+
+/// Accuracy against time: each run's largest penetration against its total seconds, one
+/// colour per detector.
+fn accuracy_plot(rows: &[Row]) -> String {
+    let mut series = Vec::new();
+    let mut detectors: Vec<&str> = rows.iter().map(|r| r.detector.as_str()).collect();
+    detectors.sort_unstable();
+    detectors.dedup();
+    for d in detectors {
+        let mut pts: Vec<(f64, f64)> = rows
+            .iter()
+            .filter(|r| r.detector == d)
+            .map(|r| (r.total_s, 1e3 * r.max_penetration))
+            .collect();
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        series.push((d.to_string(), pts));
+    }
+    plot(
+        "Max penetration against total time (one point per run)",
+        "total seconds",
+        "max penetration (mm)",
+        &series,
+        false,
+    )
+}
