@@ -512,20 +512,23 @@ fn check_static_support(blocks: &[ModelBlock], d_tol: f64) -> Result<(), Invalid
         .iter()
         .map(|b| b.fixed || !b.fixed_points.is_empty())
         .collect();
-    let near: Vec<(usize, usize)> = pairs
-        .iter()
-        .map(|q| (q.a as usize, q.b as usize))
-        .filter(|&(a, b)| separation(&blocks[a].polygon, &blocks[b].polygon).0 <= d_tol)
-        .collect();
-    // Spread support until nothing changes (at most one pass per block).
-    let mut changed = true;
-    while changed {
-        changed = false;
-        for &(a, b) in &near {
-            if supported[a] != supported[b] {
-                supported[a] = true;
-                supported[b] = true;
-                changed = true;
+    // Blocks within d_tol of each other, as adjacency lists.
+    let mut adjacent: Vec<Vec<usize>> = vec![Vec::new(); blocks.len()];
+    for q in &pairs {
+        let (a, b) = (q.a as usize, q.b as usize);
+        if separation(&blocks[a].polygon, &blocks[b].polygon).0 <= d_tol {
+            adjacent[a].push(b);
+            adjacent[b].push(a);
+        }
+    }
+    // Breadth-first from every supported block.
+    let mut queue: std::collections::VecDeque<usize> =
+        (0..blocks.len()).filter(|&i| supported[i]).collect();
+    while let Some(i) = queue.pop_front() {
+        for &j in &adjacent[i] {
+            if !supported[j] {
+                supported[j] = true;
+                queue.push_back(j);
             }
         }
     }
