@@ -2,8 +2,11 @@
 //! blocks -> neighbour pairs -> contacts -> system -> solve -> open-close iteration ->
 //! update (DESIGN 3).
 //!
-//! - Detection runs once per step at its start; the candidate pairs fix the pattern of the
-//!   global matrix for the whole step (and its retries).
+//! - Detection runs once per step at its start. The pattern of the global matrix must hold
+//!   every pair with candidates; it is set to all free neighbour pairs and kept, step
+//!   after step, until a needed pair is missing.
+//! - Before the OCI, contact states are predicted from the step's right-hand side solved
+//!   with the previous step's factor (`predict_states`).
 //! - The open-close iteration (OCI) assembles the springs of the active closed contacts,
 //!   solves, and re-checks every contact: open/closed by the sign of the normal distance
 //!   (or the tensile strength of a bonded contact), locked/sliding by Mohr-Coulomb; with
@@ -12,8 +15,9 @@
 //! - Solving: an attempt's first iteration assembles and factorises the system. Later
 //!   iterations differ from the factorised matrix only by the springs that opened or
 //!   closed since; while there are at most `MAX_RANK` of them, the iteration solves
-//!   through a low-rank update of that factor (Woodbury, `BlockSystem::solve_low_rank`)
-//!   and assembles only the right-hand side; beyond that it factorises anew.
+//!   through a low-rank update of that factor (Woodbury, `BlockSystem::solve_low_rank`),
+//!   its right-hand side changes included, and assembles nothing; beyond that it
+//!   factorises anew.
 //! - Time-step control: if OCI has not converged in `max_oci` iterations the step is
 //!   redone with dt / 3; if the largest vertex displacement exceeds d_max or the largest
 //!   rotation exceeds theta_max, with dt scaled down in proportion. After an easy step
