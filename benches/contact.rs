@@ -2,7 +2,10 @@
 //! and whole-scene detection (neighbour search + every pair) on a jointed column of about
 //! 826 blocks (10 m x 20 m cut by joint sets at 60 and 15 degrees).
 
-use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use criterion::measurement::WallTime;
+use criterion::{
+    BenchmarkGroup, BenchmarkId, Criterion, Throughput, criterion_group, criterion_main,
+};
 use dda::contact::{
     BlockShape, ContactSet, DetectionParams, NeighbourPair, detect, detector_by_name,
     neighbour_pairs,
@@ -36,31 +39,42 @@ fn column() -> Vec<BlockShape> {
         .collect()
 }
 
+/// Step-start detection of `pairs` with each detector (sequential), as `DETECTOR/param`.
+fn bench_detectors(
+    group: &mut BenchmarkGroup<'_, WallTime>,
+    param: &str,
+    shapes: &[BlockShape],
+    pairs: &[NeighbourPair],
+    params: &DetectionParams,
+) {
+    for name in DETECTORS {
+        let det = detector_by_name(name).expect("built-in");
+        let mut out = ContactSet::default();
+        let prev = ContactSet::default();
+        group.bench_function(BenchmarkId::new(name, param), |bench| {
+            bench.iter(|| {
+                detect(
+                    det.as_ref(),
+                    black_box(shapes),
+                    pairs,
+                    params,
+                    &prev,
+                    false,
+                    &mut out,
+                );
+                out.len()
+            })
+        });
+    }
+}
+
 fn bench_pairs(c: &mut Criterion) {
     let params = DetectionParams::new(0.01, 2f64.to_radians());
     let mut group = c.benchmark_group("detect_pair");
     for n in [3usize, 4, 8, 18, 64] {
         let shapes = ngon_pair(n);
         let pairs = [NeighbourPair::new(0, 1)];
-        for name in DETECTORS {
-            let det = detector_by_name(name).expect("built-in");
-            let mut out = ContactSet::default();
-            let prev = ContactSet::default();
-            group.bench_with_input(BenchmarkId::new(name, n), &n, |bench, _| {
-                bench.iter(|| {
-                    detect(
-                        det.as_ref(),
-                        black_box(&shapes),
-                        &pairs,
-                        &params,
-                        &prev,
-                        false,
-                        &mut out,
-                    );
-                    out.len()
-                })
-            });
-        }
+        bench_detectors(&mut group, &n.to_string(), &shapes, &pairs, &params);
     }
     group.finish();
 }
@@ -81,25 +95,7 @@ fn bench_scene(c: &mut Criterion) {
                 out.len()
             })
         });
-        for name in DETECTORS {
-            let det = detector_by_name(name).expect("built-in");
-            let mut out = ContactSet::default();
-            let prev = ContactSet::default();
-            group.bench_function(BenchmarkId::new(name, rtol), |bench| {
-                bench.iter(|| {
-                    detect(
-                        det.as_ref(),
-                        black_box(&shapes),
-                        &pairs,
-                        &params,
-                        &prev,
-                        false,
-                        &mut out,
-                    );
-                    out.len()
-                })
-            });
-        }
+        bench_detectors(&mut group, &rtol.to_string(), &shapes, &pairs, &params);
     }
     group.finish();
 }

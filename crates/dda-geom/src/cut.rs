@@ -161,7 +161,7 @@ pub fn cut_by_joint_sets(
     let mut line_set = Vec::new();
     for (set_index, set) in sets.iter().enumerate() {
         let normal = set.normal();
-        let (lo, hi) = extent(region, normal);
+        let (lo, hi) = region.extent(normal);
         let first = ((lo - set.offset) / set.spacing).ceil() as i64;
         let last = ((hi - set.offset) / set.spacing).floor() as i64;
         for k in first..=last {
@@ -179,16 +179,6 @@ pub fn cut_by_joint_sets(
         },
         e => e,
     })
-}
-
-/// The range of `normal . x` over a polygon's vertices.
-fn extent(poly: &ConvexPolygon, normal: DVec2) -> (f64, f64) {
-    poly.vertices()
-        .iter()
-        .map(|&p| normal.dot(p))
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
-            (lo.min(x), hi.max(x))
-        })
 }
 
 /// Cuts a convex region by individual lines, in order, into convex blocks (each block is
@@ -209,7 +199,7 @@ pub fn cut_by_lines(
         }
         let mut next = Vec::with_capacity(blocks.len() + 8);
         for block in blocks.drain(..) {
-            let (lo, hi) = extent(&block, line.normal);
+            let (lo, hi) = block.extent(line.normal);
             let crosses = lo < line.offset && hi > line.offset;
             if !crosses {
                 next.push(block);

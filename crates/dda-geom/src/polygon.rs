@@ -355,6 +355,16 @@ impl ConvexPolygon {
         Aabb::from_points(&self.vertices)
     }
 
+    /// The range of `n . x` over the vertices: the polygon's projection on `n`.
+    pub fn extent(&self, n: DVec2) -> (f64, f64) {
+        self.vertices
+            .iter()
+            .map(|v| n.dot(*v))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+                (lo.min(x), hi.max(x))
+            })
+    }
+
     /// The largest distance between two vertices.
     pub fn diameter(&self) -> f64 {
         let v = &self.vertices;
@@ -490,8 +500,8 @@ pub fn separation(a: &ConvexPolygon, b: &ConvexPolygon) -> (f64, DVec2) {
     for (p, q, flip) in [(a, b, -1.0), (b, a, 1.0)] {
         for i in 0..p.len() {
             let n = p.normal(i);
-            let (lo_q, _) = extent_along(q, n);
-            let (_, hi_p) = extent_along(p, n);
+            let (lo_q, _) = q.extent(n);
+            let (_, hi_p) = p.extent(n);
             // q beyond p's face i by lo_q - hi_p along p's outward normal n.
             let gap = lo_q - hi_p;
             if gap > best.0 {
@@ -500,16 +510,6 @@ pub fn separation(a: &ConvexPolygon, b: &ConvexPolygon) -> (f64, DVec2) {
         }
     }
     best
-}
-
-/// The range of `n . x` over a polygon.
-fn extent_along(p: &ConvexPolygon, n: DVec2) -> (f64, f64) {
-    p.vertices()
-        .iter()
-        .map(|v| n.dot(*v))
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
-            (lo.min(x), hi.max(x))
-        })
 }
 
 #[cfg(test)]
