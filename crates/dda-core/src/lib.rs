@@ -9,6 +9,7 @@
 // Index loops mirror the matrix formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
+pub mod checkpoint;
 pub mod effects;
 pub mod engine;
 pub mod kinematics;
@@ -18,8 +19,11 @@ pub mod springs;
 pub mod summary;
 pub mod system;
 
+pub use self::checkpoint::{Checkpoint, CheckpointError, OutputMarks};
 pub use self::effects::Effects;
-pub use self::engine::{BlockState, RunOptions, SimError, Simulation, StepRecord, Totals};
+pub use self::engine::{
+    BlockSnapshot, BlockState, RunOptions, SimError, Simulation, Snapshot, StepRecord, Totals,
+};
 pub use self::locate::LineIndex;
 pub use self::scene::{Format, Invalid, Model, Scene, SceneError};
 pub use self::summary::{BlockSummary, Seconds, Summary};

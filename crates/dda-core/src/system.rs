@@ -292,6 +292,39 @@ impl BlockSystem {
         self.factored
     }
 
+    /// The values of the matrix the current factor was computed from (lower triangle in
+    /// the pattern's order), if there is a factor; what a checkpoint saves to rebuild it.
+    pub fn factored_values(&self) -> Option<&[f64]> {
+        self.factored.then_some(&self.values[..])
+    }
+
+    /// Rebuilds the factor of a saved matrix (`values` from
+    /// [`BlockSystem::factored_values`], pattern already set): the same numbers, so the
+    /// same factor bit for bit. Leaves the counters as they were (a restore, not work of
+    /// the run). Errors if the values do not fit the pattern or are not positive definite.
+    pub fn restore_factor(&mut self, values: &[f64]) -> Result<(), SolveError> {
+        if values.len() != self.values.len() {
+            return Err(SolveError::Symbolic(format!(
+                "saved matrix has {} values, the pattern {}",
+                values.len(),
+                self.values.len()
+            )));
+        }
+        self.values.copy_from_slice(values);
+        self.rhs.fill(0.0);
+        let count = self.numeric_count;
+        self.solve()?;
+        self.numeric_count = count;
+        Ok(())
+    }
+
+    /// Sets the symbolic, numeric and low-rank counters (to resume a run's totals).
+    pub fn set_counters(&mut self, symbolic: u64, numeric: u64, low_rank: u64) {
+        self.symbolic_count = symbolic;
+        self.numeric_count = numeric;
+        self.low_rank_count = low_rank;
+    }
+
     /// Zeroes the right-hand side only, keeping the matrix and its factor.
     pub fn clear_rhs(&mut self) {
         self.rhs.fill(0.0);

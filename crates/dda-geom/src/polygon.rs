@@ -272,6 +272,27 @@ impl ConvexPolygon {
         }
     }
 
+    /// Rebuilds a polygon saved from a run, keeping its vertices bit for bit: checks only
+    /// that there are at least three, all finite, enclosing a positive area. Polygons a
+    /// run produces are affine images of validated ones, which tolerance-based validation
+    /// could repair and so change; a resumed run must see exactly what was saved.
+    pub fn restore(vertices: Vec<DVec2>) -> Result<Self, PolygonError> {
+        if vertices.len() < 3 {
+            return Err(PolygonError::TooFewVertices {
+                count: vertices.len(),
+            });
+        }
+        if let Some(i) = vertices.iter().position(|v| !v.is_finite()) {
+            return Err(PolygonError::NonFinite { vertex: i });
+        }
+        let p = Self::from_valid(vertices);
+        if p.area() > 0.0 {
+            Ok(p)
+        } else {
+            Err(PolygonError::ZeroArea)
+        }
+    }
+
     /// Builds a polygon from vertices known to be valid (for affine images of valid ones).
     fn from_valid(vertices: Vec<DVec2>) -> Self {
         ConvexPolygon { vertices }

@@ -1,0 +1,159 @@
+//! Checkpoints: a run resumed from a checkpoint goes on bit for bit as the uninterrupted
+//! run, and damaged checkpoint files are refused with the reason.
+
+// A panic is how a test reports failure.
+#![allow(clippy::unwrap_used)]
+
+use dda_core::{
+    Checkpoint, CheckpointError, OutputMarks, RunOptions, Scene, Simulation, StepRecord,
+};
+use std::path::Path;
+
+const SLIDING_BLOCK: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/tests/scenes/sliding-block.toml"
+);
+
+fn scenes() -> Vec<Scene> {
+    let mut v = vec![Scene::load(Path::new(SLIDING_BLOCK)).unwrap().0];
+    for name in ["paper-5.1a-column-20", "paper-4.1-sharp-corners"] {
+        v.push(dda_bench::builtin(name).unwrap());
+    }
+    v
+}
+
+/// A step record without its wall-clock fields.
+fn untimed(r: &StepRecord) -> StepRecord {
+    StepRecord {
+        detection_s: 0.0,
+        assembly_s: 0.0,
+        solve_s: 0.0,
+        ..*r
+    }
+}
+
+fn run_to_end(sim: &mut Simulation) -> Vec<StepRecord> {
+    let mut recs = Vec::new();
+    sim.run(|_, r| recs.push(untimed(r))).unwrap();
+    recs
+}
+
+#[test]
+fn resumed_run_equals_uninterrupted_run() {
+    for scene in scenes() {
+        for parallel in [true, false] {
+            let options = RunOptions { parallel };
+            let model = scene.validate().unwrap();
+            let mut whole = Simulation::new(model.clone(), options);
+            let all = run_to_end(&mut whole);
+            let expected = dda_core::Summary::of(&whole, None).without_timing();
+            assert!(all.len() > 20, "{}: too short a run to test", scene.name);
+
+            // Stop at several points, through the file format each time.
+            for stop in [1, all.len() / 3, all.len() - 1] {
+                let mut first = Simulation::new(model.clone(), options);
+                for _ in 0..stop {
+                    first.step().unwrap();
+                }
+                let path = Path::new("checkpoint.bin");
+                let bytes = Checkpoint::of(&first, &scene, OutputMarks::default())
+                    .unwrap()
+                    .to_bytes()
+                    .unwrap();
+                drop(first);
+                let ck = Checkpoint::from_bytes(&bytes, path).unwrap();
+                let saved_scene = ck.scene(path).unwrap();
+                assert_eq!(saved_scene, scene);
+                let mut resumed = ck
+                    .resume(saved_scene.validate().unwrap(), options, path)
+                    .unwrap();
+                let rest = run_to_end(&mut resumed);
+                assert_eq!(
+                    rest,
+                    all[stop..],
+                    "{} (parallel {parallel}): steps after a resume at step {stop} differ",
+                    scene.name
+                );
+                assert_eq!(
+                    dda_core::Summary::of(&resumed, None).without_timing(),
+                    expected,
+                    "{} (parallel {parallel}): summary after a resume at step {stop}",
+                    scene.name
+                );
+            }
+        }
+    }
+}
+
+/// A checkpoint of a few steps of the sliding block, as bytes.
+fn checkpoint_bytes() -> Vec<u8> {
+    let scene = Scene::load(Path::new(SLIDING_BLOCK)).unwrap().0;
+    let mut sim = Simulation::new(scene.validate().unwrap(), RunOptions::default());
+    for _ in 0..5 {
+        sim.step().unwrap();
+    }
+    Checkpoint::of(&sim, &scene, OutputMarks::default())
+        .unwrap()
+        .to_bytes()
+        .unwrap()
+}
+
+#[test]
+fn damaged_checkpoints_are_refused() {
+    let good = checkpoint_bytes();
+    let path = Path::new("run/checkpoint.bin");
+    assert!(Checkpoint::from_bytes(&good, path).is_ok());
+
+    for cut in [0, 5, 23, 24, good.len() / 2, good.len() - 1] {
+        let e = Checkpoint::from_bytes(&good[..cut], path).unwrap_err();
+        match e {
+            CheckpointError::Truncated { .. } if cut >= 8 => {}
+            CheckpointError::NotACheckpoint { .. } if cut < 8 => {}
+            other => panic!("cut at {cut}: {other}"),
+        }
+        assert!(e_names_file(&Checkpoint::from_bytes(&good[..cut], path)));
+    }
+
+    // Every byte of the payload is covered by the checksum: flip one here and there.
+    for at in [24, 100, good.len() / 2, good.len() - 1] {
+        let mut bad = good.clone();
+        bad[at] ^= 0x10;
+        let e = Checkpoint::from_bytes(&bad, path).unwrap_err();
+        assert!(
+            matches!(e, CheckpointError::Checksum { .. }),
+            "flip at {at}: {e}"
+        );
+    }
+
+    let mut bad = good.clone();
+    bad[8] = 99;
+    let e = Checkpoint::from_bytes(&bad, path).unwrap_err();
+    assert!(
+        matches!(e, CheckpointError::Version { found: 99, .. }),
+        "{e}"
+    );
+
+    let mut bad = good.clone();
+    bad[0] = b'X';
+    let e = Checkpoint::from_bytes(&bad, path).unwrap_err();
+    assert!(matches!(e, CheckpointError::NotACheckpoint { .. }), "{e}");
+}
+
+fn e_names_file(r: &Result<Checkpoint, CheckpointError>) -> bool {
+    match r {
+        Err(e) => e.to_string().contains("run/checkpoint.bin"),
+        Ok(_) => false,
+    }
+}
+
+#[test]
+fn checkpoint_of_another_scene_is_refused() {
+    let good = checkpoint_bytes();
+    let path = Path::new("checkpoint.bin");
+    let ck = Checkpoint::from_bytes(&good, path).unwrap();
+    let other = dda_bench::builtin("paper-5.1a-column-20").unwrap();
+    let e = ck
+        .resume(other.validate().unwrap(), RunOptions::default(), path)
+        .unwrap_err();
+    assert!(e.to_string().contains("blocks"), "{e}");
+}
