@@ -77,6 +77,15 @@ fn run_writes_summary_history_and_frames() {
     let mut lines = history.lines();
     assert!(lines.next().unwrap().starts_with("step,t,dt,oci"));
     assert_eq!(lines.count() as u64, steps);
+    let report = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(report.contains("<canvas") && report.contains("Kinetic energy"));
+    assert!(
+        !report.contains("http://") || !report.contains("src=\"http"),
+        "no network"
+    );
+    let scene: dda_core::Scene =
+        serde_json::from_str(&std::fs::read_to_string(out.join("scene.json")).unwrap()).unwrap();
+    assert_eq!(scene.name, "sliding-block");
     for k in 0..=2 {
         let f = out.join(format!("frames/frame-{k:04}.svg"));
         assert!(
@@ -249,6 +258,184 @@ fn failed_simulation_exits_1_and_keeps_last_good_state() {
         "{}",
         s["error"]
     );
-    assert!(s["time_simulated"].as_f64().unwrap() < 0.2);
+    let t = s["time_simulated"].as_f64().unwrap();
+    assert!(t < 0.2);
     assert!(out.join("history.csv").exists());
+
+    // The diagnosis: which blocks and contacts, the last step size tried.
+    let f = &s["failure"];
+    assert_eq!(f["t"].as_f64().unwrap(), t, "{f}");
+    assert!(f["last_dt"].as_f64().unwrap() > 0.0, "{f}");
+    let blocks: Vec<&str> = f["blocks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|b| b.as_str().unwrap())
+        .collect();
+    assert!(blocks.contains(&"slider"), "{f}");
+    for c in f["contacts"].as_array().unwrap() {
+        for k in ["vertex_block", "edge_block"] {
+            assert!(blocks.contains(&c[k].as_str().unwrap()), "{c}");
+        }
+    }
+    let report = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(
+        report.contains("Why the run stopped"),
+        "report shows the failure"
+    );
+    assert!(report.contains("slider"));
+
+    // The last good state: a loadable checkpoint at the time reached, and the last frame.
+    let path = out.join("checkpoint.bin");
+    let ck = dda_core::Checkpoint::load(&path).unwrap();
+    assert_eq!(ck.state.t, t);
+    let frames = std::fs::read_to_string(out.join("frames.jsonl")).unwrap();
+    let last: serde_json::Value = serde_json::from_str(frames.lines().last().unwrap()).unwrap();
+    assert_eq!(last["t"].as_f64().unwrap(), t);
+    // A failed run is not resumable: it would fail again the same way.
+    let o = dda(&["resume", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn render_redraws_frames_and_report_without_simulating() {
+    let out = scratch("render").join("out");
+    assert!(run_scene(&out, &["--quiet"]).status.success());
+    let read = |p: &str| std::fs::read(out.join(p)).unwrap();
+    let report = read("report.html");
+    let frame = read("frames/frame-0001.svg");
+    let history = read("history.csv");
+    std::fs::remove_dir_all(out.join("frames")).unwrap();
+    std::fs::remove_file(out.join("report.html")).unwrap();
+    let o = dda(&["render", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(read("report.html"), report);
+    assert_eq!(read("frames/frame-0001.svg"), frame);
+    assert_eq!(read("history.csv"), history, "render does not simulate");
+    // A damaged frames.jsonl is bad input, named with its line.
+    std::fs::write(out.join("frames.jsonl"), "{\"t\": 0}\n").unwrap();
+    let o = dda(&["render", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("frames.jsonl: line 1"));
+}
+
+/// history.csv without its wall-clock columns (the last three).
+fn untimed_history(path: &Path) -> Vec<String> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(|l| l.rsplitn(4, ',').last().unwrap().to_string())
+        .collect()
+}
+
+fn untimed_summary(dir: &Path) -> serde_json::Value {
+    let mut s = summary(dir);
+    s["seconds"] = serde_json::Value::Null;
+    s
+}
+
+/// A run killed with SIGKILL at a random moment leaves a loadable checkpoint, damaged
+/// copies of it are refused, and `dda resume` ends exactly as the uninterrupted run.
+#[test]
+fn killed_run_resumes_to_the_uninterrupted_result() {
+    let dir = scratch("kill");
+    let scene = "paper-5.1b-column-93";
+    let whole = dir.join("whole");
+    let o = dda(&["run", scene, "--out", whole.to_str().unwrap(), "--quiet"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+
+    let seed = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .subsec_nanos();
+    let mut killed = None;
+    for attempt in 0..4u32 {
+        let out = dir.join(format!("run{attempt}"));
+        let work = dir.join(format!(".run{attempt}.partial"));
+        let mut child = Command::new(env!("CARGO_BIN_EXE_dda"))
+            .args(["run", scene, "--out", out.to_str().unwrap()])
+            .args(["--checkpoint-every", "3", "--quiet"])
+            .spawn()
+            .unwrap();
+        let started = std::time::Instant::now();
+        while !work.join("checkpoint.bin").exists() {
+            assert!(started.elapsed().as_secs() < 120, "no checkpoint written");
+            if child.try_wait().unwrap().is_some() {
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(2));
+        }
+        // A random moment after the first checkpoint, shorter on each retry.
+        let delay = (seed.wrapping_mul(2_654_435_761).wrapping_add(attempt) % 400) >> attempt;
+        std::thread::sleep(std::time::Duration::from_millis(u64::from(delay)));
+        let alive = child.try_wait().unwrap().is_none();
+        child.kill().unwrap_or(()); // SIGKILL on Unix
+        child.wait().unwrap();
+        if alive {
+            killed = Some((out, work, delay));
+            break;
+        }
+    }
+    let (out, work, delay) = killed.expect("the run always finished before it could be killed");
+    let ck_path = work.join("checkpoint.bin");
+    let ck = dda_core::Checkpoint::load(&ck_path)
+        .unwrap_or_else(|e| panic!("killed {delay} ms after the first checkpoint: {e}"));
+    assert!(ck.state.totals.steps % 3 == 0 && ck.state.totals.steps > 0);
+    assert!(!out.exists(), "an interrupted run is not moved into place");
+
+    // Damaged copies are refused with the reason, and nothing is written.
+    let good = std::fs::read(&ck_path).unwrap();
+    for (name, bytes, says) in [
+        ("cut", good[..good.len() / 2].to_vec(), "truncated"),
+        (
+            "flip",
+            {
+                let mut b = good.clone();
+                let k = b.len() - 7;
+                b[k] ^= 1;
+                b
+            },
+            "corrupted",
+        ),
+    ] {
+        let copy_work = dir.join(format!(".{name}.partial"));
+        std::fs::create_dir_all(&copy_work).unwrap();
+        for f in ["history.csv", "frames.jsonl", "scene.json"] {
+            std::fs::copy(work.join(f), copy_work.join(f)).unwrap();
+        }
+        std::fs::write(copy_work.join("checkpoint.bin"), bytes).unwrap();
+        let o = dda(&["resume", dir.join(name).to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2), "{name}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains(says) && err.contains("checkpoint.bin"),
+            "{err}"
+        );
+        assert!(!dir.join(name).exists(), "{name}: nothing written");
+    }
+
+    // A new run into the same output refuses to overwrite the interrupted one.
+    let o = dda(&["run", scene, "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("dda resume"));
+
+    let o = dda(&["resume", out.to_str().unwrap(), "--quiet"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(!work.exists() && !out.join("checkpoint.bin").exists());
+    assert_eq!(
+        untimed_summary(&out),
+        untimed_summary(&whole),
+        "killed {delay} ms after the first checkpoint"
+    );
+    assert_eq!(
+        untimed_history(&out.join("history.csv")),
+        untimed_history(&whole.join("history.csv"))
+    );
+    for f in ["frames.jsonl", "scene.json", "frames/frame-0005.svg"] {
+        assert_eq!(
+            std::fs::read(out.join(f)).unwrap(),
+            std::fs::read(whole.join(f)).unwrap(),
+            "{f}"
+        );
+    }
 }

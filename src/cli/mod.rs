@@ -1,9 +1,11 @@
-//! Command-line interface: `dda run`, `dda check`, `dda scenes` (DESIGN 5.2).
+//! Command-line interface: `dda run`, `dda resume`, `dda render`, `dda check`,
+//! `dda scenes` (DESIGN 5.2).
 //!
 //! Exit codes: 0 success, 1 a simulation that cannot go on (its outputs are written up
 //! to the last good state), 2 bad input (a message naming the file, key and line, and
 //! nothing written).
 
+mod render;
 mod run;
 
 use clap::{Parser, Subcommand};
@@ -23,6 +25,13 @@ struct Cli {
 enum Command {
     /// Run a scene file (.toml or .json) or a built-in scene (default: the jointed column).
     Run(run::RunArgs),
+    /// Continue an interrupted run from its last checkpoint (see `run --checkpoint-every`).
+    Resume(run::ResumeArgs),
+    /// Redraw the frames and report.html of a finished run without simulating again.
+    Render {
+        /// The run's output directory.
+        dir: PathBuf,
+    },
     /// Validate a scene file without running it.
     Check {
         /// Scene file or built-in name.
@@ -47,6 +56,8 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run(args) => run::run(args),
+        Command::Resume(args) => run::resume(args),
+        Command::Render { dir } => render::render(&dir),
         Command::Check { scene } => check(&scene),
         Command::Scenes => {
             let width = dda_bench::BUILTINS

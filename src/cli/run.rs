@@ -1,18 +1,29 @@
-//! `dda run`: runs a scene and writes summary.json, history.csv and frames/*.svg.
+//! `dda run` and `dda resume`: run a scene, writing summary.json, history.csv,
+//! frames.jsonl, frames/*.svg, report.html and (on request, and always on failure)
+//! checkpoint.bin.
 //!
-//! Outputs are written into a staging directory next to the target and moved into place
-//! when the run ends, so a directory that exists is never half-written; a failed run
-//! still moves its outputs (up to the last good state) into place, with the diagnosis in
-//! summary.json.
+//! A run works in a staging directory next to its output directory (`.NAME.partial`)
+//! and moves it into place when it ends, so an output directory that exists is never
+//! half-written. A run with `--checkpoint-every N` saves its full state there every N
+//! steps; if it is killed, `dda resume OUT` continues from the last checkpoint, cutting
+//! history.csv and frames.jsonl back to where the checkpoint was taken, and ends exactly
+//! as the uninterrupted run would have. A failed run moves its outputs into place with
+//! the diagnosis in summary.json and report.html and the last good state in
+//! checkpoint.bin.
 
+use super::render::{render_outputs, write_new};
 use super::{BadInput, default_out, resolve_scene, validate};
 use clap::Args;
-use dda::report::{HISTORY_HEADER, frame_svg, frame_view, history_row};
-use dda_core::{RunOptions, Simulation, Summary};
+use dda::report::{Frame, HISTORY_HEADER, frame_resolution, frame_view, history_row};
+use dda_core::{Checkpoint, OutputMarks, RunOptions, Scene, Simulation, Summary};
 use indicatif::{ProgressBar, ProgressStyle};
-use std::io::{BufWriter, IsTerminal, Write};
+use std::fs::File;
+use std::io::{BufWriter, IsTerminal, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+
+/// The checkpoint file's name in a run directory.
+pub const CHECKPOINT_FILE: &str = "checkpoint.bin";
 
 /// Arguments of `dda run`.
 #[derive(Debug, Args)]
@@ -29,12 +40,45 @@ pub struct RunArgs {
     /// step displacement together (paper eq. 15).
     #[arg(long)]
     rtol: Option<f64>,
+    /// Save the full state every N steps, to continue with `dda resume` if the run is
+    /// interrupted.
+    #[arg(long, value_name = "N")]
+    checkpoint_every: Option<u64>,
     /// No progress bar and no report on the terminal.
     #[arg(long)]
     quiet: bool,
 }
 
-/// Runs the command.
+/// Arguments of `dda resume`.
+#[derive(Debug, Args)]
+pub struct ResumeArgs {
+    /// The output directory of the interrupted run (or its `.NAME.partial` staging
+    /// directory).
+    dir: PathBuf,
+    /// No progress bar and no report on the terminal.
+    #[arg(long)]
+    quiet: bool,
+}
+
+/// A run under way: its scene, state, directories and output files.
+struct Job {
+    scene: Scene,
+    sim: Simulation,
+    work: PathBuf,
+    out: PathBuf,
+    marks: OutputMarks,
+    history: BufWriter<File>,
+    frames: BufWriter<File>,
+    animation_frames: u64,
+    resolution: f64,
+    quiet: bool,
+}
+
+fn io_err(e: std::io::Error, what: &Path) -> BadInput {
+    BadInput(format!("cannot write {}: {e}", what.display()))
+}
+
+/// Runs `dda run`.
 pub fn run(args: RunArgs) -> Result<ExitCode, BadInput> {
     let source = args
         .scene
@@ -52,22 +96,156 @@ pub fn run(args: RunArgs) -> Result<ExitCode, BadInput> {
         }
         scene.scale_tolerances(r);
     }
+    if args.checkpoint_every == Some(0) {
+        return Err(BadInput("--checkpoint-every must be at least 1".into()));
+    }
     let model = validate(&scene, &source)?;
     let out = args.out.clone().unwrap_or_else(|| default_out(&scene));
-    let staging = staging_dir(&out);
-    let io =
-        |e: std::io::Error, what: &Path| BadInput(format!("cannot write {}: {e}", what.display()));
-    if staging.exists() {
-        std::fs::remove_dir_all(&staging).map_err(|e| io(e, &staging))?;
+    let work = staging_dir(&out);
+    if work.join(CHECKPOINT_FILE).exists() {
+        return Err(BadInput(format!(
+            "{} holds an interrupted run of this output: `dda resume {}` continues it; \
+             delete {} to start afresh",
+            work.display(),
+            out.display(),
+            work.display()
+        )));
     }
-    std::fs::create_dir_all(staging.join("frames")).map_err(|e| io(e, &staging))?;
+    if work.exists() {
+        std::fs::remove_dir_all(&work).map_err(|e| io_err(e, &work))?;
+    }
+    std::fs::create_dir_all(&work).map_err(|e| io_err(e, &work))?;
+    let scene_json = serde_json::to_string_pretty(&scene)
+        .map_err(|e| BadInput(format!("cannot serialise the scene: {e}")))?;
+    write_new(&work.join("scene.json"), &(scene_json + "\n"))?;
 
-    let mut sim = Simulation::new(model, RunOptions::default());
-    let p = sim.model().params.clone();
-    if !args.quiet {
+    let sim = Simulation::new(model, RunOptions::default());
+    let history_path = work.join("history.csv");
+    let frames_path = work.join("frames.jsonl");
+    let history =
+        BufWriter::new(File::create(&history_path).map_err(|e| io_err(e, &history_path))?);
+    let frames = BufWriter::new(File::create(&frames_path).map_err(|e| io_err(e, &frames_path))?);
+    let mut job = Job::new(scene, sim, work, out, history, frames, args.quiet);
+    job.marks.checkpoint_every = args.checkpoint_every.unwrap_or(0);
+    job.write_history(HISTORY_HEADER)?;
+    job.write_frame(job.sim.model().params.frames > 0)?;
+    job.announce("scene");
+    job.drive()
+}
+
+/// Runs `dda resume`.
+pub fn resume(args: ResumeArgs) -> Result<ExitCode, BadInput> {
+    let (work, out) = work_and_out(&args.dir);
+    let path = work.join(CHECKPOINT_FILE);
+    if !path.exists() {
+        let done = out.join("summary.json").exists();
+        return Err(BadInput(if done {
+            format!(
+                "{} is a finished run (see its summary.json): nothing to resume",
+                out.display()
+            )
+        } else {
+            format!(
+                "no checkpoint to resume: {} does not exist (run with --checkpoint-every N)",
+                path.display()
+            )
+        }));
+    }
+    let ck = Checkpoint::load(&path).map_err(|e| BadInput(e.to_string()))?;
+    let scene = ck.scene(&path).map_err(|e| BadInput(e.to_string()))?;
+    let model = validate(&scene, &path.display().to_string())?;
+    let marks = ck.outputs.clone();
+    let sim = ck
+        .resume(model, RunOptions::default(), &path)
+        .map_err(|e| BadInput(e.to_string()))?;
+    let history = reopen(&work.join("history.csv"), marks.history_bytes)?;
+    let frames = reopen(&work.join("frames.jsonl"), marks.frames_bytes)?;
+    let mut job = Job::new(scene, sim, work, out, history, frames, args.quiet);
+    job.marks = marks;
+    job.announce("resuming");
+    job.drive()
+}
+
+/// Opens `path` for appending after cutting it back to `len` bytes.
+fn reopen(path: &Path, len: u64) -> Result<BufWriter<File>, BadInput> {
+    let bad = |e: std::io::Error| BadInput(format!("cannot resume {}: {e}", path.display()));
+    let mut f = std::fs::OpenOptions::new()
+        .write(true)
+        .open(path)
+        .map_err(bad)?;
+    let have = f.metadata().map_err(bad)?.len();
+    if have < len {
+        return Err(BadInput(format!(
+            "cannot resume: {} has {have} bytes, the checkpoint was taken after {len}",
+            path.display()
+        )));
+    }
+    f.set_len(len).map_err(bad)?;
+    f.seek(SeekFrom::End(0)).map_err(bad)?;
+    Ok(BufWriter::new(f))
+}
+
+/// The staging (work) directory and the output directory named by `dir`, which may be
+/// either.
+fn work_and_out(dir: &Path) -> (PathBuf, PathBuf) {
+    let name = dir
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    match name
+        .strip_prefix('.')
+        .and_then(|n| n.strip_suffix(".partial"))
+    {
+        Some(base) => (dir.to_path_buf(), dir.with_file_name(base)),
+        None => (staging_dir(dir), dir.to_path_buf()),
+    }
+}
+
+/// Most coordinates the animation holds over all its frames; fewer frames for larger
+/// models keep report.html to a few megabytes.
+const ANIMATION_BUDGET: usize = 500_000;
+
+impl Job {
+    fn new(
+        scene: Scene,
+        sim: Simulation,
+        work: PathBuf,
+        out: PathBuf,
+        history: BufWriter<File>,
+        frames: BufWriter<File>,
+        quiet: bool,
+    ) -> Self {
+        let vertices: usize = sim.blocks().iter().map(|b| b.polygon.len()).sum();
+        let animation_frames = (ANIMATION_BUDGET / (2 * vertices).max(1)).clamp(20, 200) as u64;
+        let resolution = frame_resolution(&frame_view(sim.model()));
+        Job {
+            scene,
+            sim,
+            work,
+            out,
+            marks: OutputMarks {
+                animation_next: 1,
+                svg_next: 1,
+                ..OutputMarks::default()
+            },
+            history,
+            frames,
+            animation_frames,
+            resolution,
+            quiet,
+        }
+    }
+
+    fn announce(&self, what: &str) {
+        if self.quiet {
+            return;
+        }
+        let sim = &self.sim;
+        let p = &sim.model().params;
         eprintln!(
-            "scene `{}`: {} blocks ({} unknowns), detector {}, d_tol {} m, d_max {} m",
+            "{what} `{}` at t = {} s: {} blocks ({} unknowns), detector {}, d_tol {} m, d_max {} m",
             sim.model().name,
+            sim.time(),
             sim.blocks().len(),
             sim.unknowns(),
             sim.detector_name(),
@@ -75,103 +253,174 @@ pub fn run(args: RunArgs) -> Result<ExitCode, BadInput> {
             p.d_max
         );
         eprintln!("effects: {}", sim.effects().names().join(", "));
-    }
-    let view = frame_view(&sim);
-    let mut frame = 0u32;
-    let write_frame = |sim: &Simulation, frame: u32| -> Result<(), BadInput> {
-        let path = staging.join("frames").join(format!("frame-{frame:04}.svg"));
-        std::fs::write(&path, frame_svg(sim, &view)).map_err(|e| io(e, &path))
-    };
-    if p.frames > 0 {
-        write_frame(&sim, 0)?;
-    }
-    let history_path = staging.join("history.csv");
-    let file = std::fs::File::create(&history_path).map_err(|e| io(e, &history_path))?;
-    let mut history = BufWriter::new(file);
-    writeln!(history, "{HISTORY_HEADER}").map_err(|e| io(e, &history_path))?;
-
-    let bar = if !args.quiet && std::io::stderr().is_terminal() {
-        let bar = ProgressBar::new(1000);
-        bar.set_style(
-            ProgressStyle::with_template(
-                "{elapsed_precise} [{bar:40}] t = {msg} s  ({per_sec}, eta {eta})",
-            )
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .progress_chars("=> "),
-        );
-        Some(bar)
-    } else {
-        None
-    };
-
-    let mut io_error = None;
-    let result = sim.run(|sim, rec| {
-        if io_error.is_some() {
-            return;
+        if self.marks.checkpoint_every > 0 {
+            eprintln!(
+                "checkpoint every {} steps: {} (continue with `dda resume {}`)",
+                self.marks.checkpoint_every,
+                self.work.join(CHECKPOINT_FILE).display(),
+                self.out.display()
+            );
         }
-        if let Err(e) = writeln!(history, "{}", history_row(rec)) {
-            io_error = Some(io(e, &history_path));
+    }
+
+    fn write_history(&mut self, line: &str) -> Result<(), BadInput> {
+        let path = self.work.join("history.csv");
+        writeln!(self.history, "{line}").map_err(|e| io_err(e, &path))?;
+        self.marks.history_bytes += line.len() as u64 + 1;
+        Ok(())
+    }
+
+    /// Appends the current state to frames.jsonl.
+    fn write_frame(&mut self, svg: bool) -> Result<(), BadInput> {
+        let path = self.work.join("frames.jsonl");
+        let frame = Frame::of(&self.sim, svg, self.resolution);
+        let line = serde_json::to_string(&frame)
+            .map_err(|e| BadInput(format!("cannot serialise a frame: {e}")))?;
+        writeln!(self.frames, "{line}").map_err(|e| io_err(e, &path))?;
+        self.marks.frames_bytes += line.len() as u64 + 1;
+        Ok(())
+    }
+
+    /// Records a frame if the step crossed an instant of the animation grid or of the
+    /// SVG-frame grid.
+    fn sample_frames(&mut self) -> Result<(), BadInput> {
+        let p = &self.sim.model().params;
+        let (t, duration, svg_frames) = (self.sim.time(), p.duration, u64::from(p.frames));
+        let due = |next: u64, n: u64| {
+            n > 0 && next <= n && t >= next as f64 * duration / n as f64 * (1.0 - 1e-9)
+        };
+        let animation = due(self.marks.animation_next, self.animation_frames);
+        let svg = due(self.marks.svg_next, svg_frames);
+        while due(self.marks.animation_next, self.animation_frames) {
+            self.marks.animation_next += 1;
         }
-        if p.frames > 0 {
-            let next = (frame + 1) as f64 * p.duration / p.frames as f64;
-            if sim.time() >= next * (1.0 - 1e-9) {
-                frame += 1;
-                if let Err(e) = write_frame(sim, frame) {
-                    io_error = Some(e);
+        while due(self.marks.svg_next, svg_frames) {
+            self.marks.svg_next += 1;
+        }
+        if animation || svg {
+            self.write_frame(svg)?;
+        }
+        Ok(())
+    }
+
+    /// Flushes the output files to disk and saves the checkpoint atomically.
+    fn checkpoint(&mut self) -> Result<(), BadInput> {
+        for (w, name) in [
+            (&mut self.history, "history.csv"),
+            (&mut self.frames, "frames.jsonl"),
+        ] {
+            let path = self.work.join(name);
+            w.flush().map_err(|e| io_err(e, &path))?;
+            w.get_ref().sync_data().map_err(|e| io_err(e, &path))?;
+        }
+        let ck = Checkpoint::of(&self.sim, &self.scene, self.marks.clone())
+            .map_err(|e| BadInput(format!("cannot build the checkpoint: {e}")))?;
+        ck.save(&self.work.join(CHECKPOINT_FILE))
+            .map_err(|e| BadInput(e.to_string()))
+    }
+
+    /// Steps to the end (or a failure), then writes the summary and the report and moves
+    /// the outputs into place.
+    fn drive(mut self) -> Result<ExitCode, BadInput> {
+        let bar = if !self.quiet && std::io::stderr().is_terminal() {
+            let bar = ProgressBar::new(1000);
+            bar.set_style(
+                ProgressStyle::with_template(
+                    "{elapsed_precise} [{bar:40}] t = {msg} s  ({per_sec}, eta {eta})",
+                )
+                .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .progress_chars("=> "),
+            );
+            Some(bar)
+        } else {
+            None
+        };
+        let duration = self.sim.model().params.duration;
+        let mut error = None;
+        while !self.sim.finished() {
+            match self.sim.step() {
+                Ok(rec) => {
+                    self.write_history(&history_row(&rec))?;
+                    self.sample_frames()?;
+                    let every = self.marks.checkpoint_every;
+                    if every > 0 && rec.step % every == 0 && !self.sim.finished() {
+                        self.checkpoint()?;
+                    }
+                    if let Some(bar) = &bar {
+                        bar.set_position((1000.0 * self.sim.time() / duration) as u64);
+                        bar.set_message(format!("{:.4}", self.sim.time()));
+                    }
+                }
+                Err(e) => {
+                    error = Some(e.to_string());
+                    break;
                 }
             }
         }
-        if let Some(bar) = &bar {
-            bar.set_position((1000.0 * sim.time() / p.duration) as u64);
-            bar.set_message(format!("{:.4}", sim.time()));
+        if let Some(bar) = bar {
+            bar.finish_and_clear();
         }
-    });
-    if let Some(bar) = bar {
-        bar.finish_and_clear();
-    }
-    if let Some(e) = io_error {
-        return Err(e);
-    }
-    history.flush().map_err(|e| io(e, &history_path))?;
-    let error = result.as_ref().err().map(|e| e.to_string());
-    if error.is_some() && p.frames > 0 {
-        // The last good state, as the final frame.
-        write_frame(&sim, frame + 1)?;
-    }
-    let summary = Summary::of(&sim, error.clone());
-    let summary_path = staging.join("summary.json");
-    let json = serde_json::to_string_pretty(&summary)
-        .map_err(|e| BadInput(format!("cannot serialise the summary: {e}")))?;
-    std::fs::write(&summary_path, json + "\n").map_err(|e| io(e, &summary_path))?;
-    if out.exists() {
-        std::fs::remove_dir_all(&out).map_err(|e| io(e, &out))?;
-    }
-    std::fs::rename(&staging, &out).map_err(|e| io(e, &out))?;
+        let checkpoint_path = self.work.join(CHECKPOINT_FILE);
+        if error.is_some() {
+            // The last good state: as the final frame, and as a checkpoint.
+            self.write_frame(true)?;
+            self.checkpoint()?;
+        } else {
+            for (w, name) in [
+                (&mut self.history, "history.csv"),
+                (&mut self.frames, "frames.jsonl"),
+            ] {
+                w.flush().map_err(|e| io_err(e, &self.work.join(name)))?;
+            }
+            if checkpoint_path.exists() {
+                std::fs::remove_file(&checkpoint_path).map_err(|e| io_err(e, &checkpoint_path))?;
+            }
+        }
+        let summary = Summary::of(&self.sim, error.clone());
+        let json = serde_json::to_string_pretty(&summary)
+            .map_err(|e| BadInput(format!("cannot serialise the summary: {e}")))?;
+        write_new(&self.work.join("summary.json"), &(json + "\n"))?;
+        render_outputs(&self.work, &self.scene, self.sim.model(), &summary)?;
+        if self.out.exists() {
+            std::fs::remove_dir_all(&self.out).map_err(|e| io_err(e, &self.out))?;
+        }
+        std::fs::rename(&self.work, &self.out).map_err(|e| io_err(e, &self.out))?;
 
-    if !args.quiet {
-        let s = &summary;
-        eprintln!(
-            "{} s simulated in {} steps ({} OCI iterations, {} dt cuts); \
-             {:.3} s wall: detection {:.3} s, assembly {:.3} s, solve {:.3} s; \
-             max penetration {:.3e} m",
-            s.time_simulated,
-            s.steps,
-            s.oci_iterations,
-            s.time_step_cuts,
-            s.seconds.total,
-            s.seconds.contact_detection,
-            s.seconds.assembly,
-            s.seconds.solve,
-            s.max_penetration
-        );
-        eprintln!("wrote {}", out.display());
-    }
-    match error {
-        Some(e) => {
-            eprintln!("error: the simulation cannot go on: {e}");
-            Ok(ExitCode::from(1))
+        if !self.quiet {
+            let s = &summary;
+            eprintln!(
+                "{} s simulated in {} steps ({} OCI iterations, {} dt cuts); \
+                 {:.3} s wall: detection {:.3} s, assembly {:.3} s, solve {:.3} s; \
+                 max penetration {:.3e} m",
+                s.time_simulated,
+                s.steps,
+                s.oci_iterations,
+                s.time_step_cuts,
+                s.seconds.total,
+                s.seconds.contact_detection,
+                s.seconds.assembly,
+                s.seconds.solve,
+                s.max_penetration
+            );
+            eprintln!("wrote {}", self.out.display());
         }
-        None => Ok(ExitCode::SUCCESS),
+        match error {
+            Some(e) => {
+                eprintln!("error: the simulation cannot go on: {e}");
+                if let Some(d) = &summary.failure
+                    && !d.blocks.is_empty()
+                {
+                    eprintln!("  blocks involved: {}", d.blocks.join(", "));
+                }
+                eprintln!(
+                    "  last good state: {} (diagnosis in {})",
+                    self.out.join(CHECKPOINT_FILE).display(),
+                    self.out.join("summary.json").display()
+                );
+                Ok(ExitCode::from(1))
+            }
+            None => Ok(ExitCode::SUCCESS),
+        }
     }
 }
 

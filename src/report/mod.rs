@@ -1,8 +1,16 @@
-//! What a run writes: history.csv rows and SVG frames of the blocks; pictures of a
-//! collision's outcome for the robustness report.
+//! What a run writes: history.csv rows, frames.jsonl (the recorded instants), SVG
+//! pictures of them, plots and the self-contained report.html; pictures of a collision's
+//! outcome for the robustness report.
 
-use dda_core::{Simulation, StepRecord};
+mod html;
+mod plot;
+
+pub use self::html::{HistoryRow, Report, parse_history, report_html};
+pub use self::plot::plot;
+
+use dda_core::{Model, Simulation, StepRecord};
 use dda_geom::{Aabb, ConvexPolygon, DVec2};
+use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 
 /// Header of history.csv.
@@ -29,17 +37,85 @@ pub fn history_row(r: &StepRecord) -> String {
     )
 }
 
+/// One recorded instant of a run, as a line of frames.jsonl: what the report animates
+/// and `frames/*.svg` draw. Coordinates are rounded (see [`Frame::of`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Frame {
+    /// Simulated time, s.
+    pub t: f64,
+    /// Whether `frames/` gets an SVG picture of this instant (the scene's `frames`).
+    pub svg: bool,
+    /// Each block's vertices, flattened: x0, y0, x1, y1, ...
+    pub blocks: Vec<Vec<f64>>,
+    /// Each block's centroid speed, m/s.
+    pub speed: Vec<f64>,
+    /// Where the active closed contacts are (their vertices), flattened x, y.
+    pub contacts: Vec<f64>,
+}
+
+impl Frame {
+    /// The blocks and contacts of `sim` now, coordinates rounded to `resolution` (m).
+    pub fn of(sim: &Simulation, svg: bool, resolution: f64) -> Frame {
+        let round = |x: f64| (x / resolution).round() * resolution;
+        let blocks = sim
+            .blocks()
+            .iter()
+            .map(|b| {
+                b.polygon
+                    .vertices()
+                    .iter()
+                    .flat_map(|v| [round(v.x), round(v.y)])
+                    .collect()
+            })
+            .collect();
+        let speed = sim
+            .blocks()
+            .iter()
+            .map(|b| {
+                let v = glam::DVec2::new(b.velocity[0], b.velocity[1]).length();
+                // Four significant digits are plenty for a colour.
+                if v > 0.0 {
+                    let scale = 10f64.powi(3 - v.log10().floor() as i32);
+                    (v * scale).round() / scale
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let mut contacts = Vec::new();
+        for c in sim.contacts().active().filter(|c| c.state.is_closed()) {
+            let b = &sim.blocks()[c.key.vertex_block as usize];
+            if let Some(v) = b.polygon.vertices().get(c.key.vertex as usize) {
+                contacts.extend([round(v.x), round(v.y)]);
+            }
+        }
+        Frame {
+            t: sim.time(),
+            svg,
+            blocks,
+            speed,
+            contacts,
+        }
+    }
+
+    /// The polygon of block `i`, as points.
+    pub fn polygon(&self, i: usize) -> impl Iterator<Item = DVec2> + '_ {
+        self.blocks[i]
+            .chunks_exact(2)
+            .map(|p| DVec2::new(p[0], p[1]))
+    }
+}
+
 /// The box every frame of a run shows: the free blocks' extent at the start with a
 /// margin of a quarter of its size (room to move), or every block's if none is free.
-pub fn frame_view(sim: &Simulation) -> Aabb {
-    let free: Vec<Aabb> = sim
-        .blocks()
+pub fn frame_view(model: &Model) -> Aabb {
+    let free: Vec<Aabb> = model
+        .blocks
         .iter()
-        .zip(&sim.model().blocks)
-        .filter(|(_, m)| !m.fixed)
-        .map(|(b, _)| b.polygon.aabb())
+        .filter(|m| !m.fixed)
+        .map(|m| m.polygon.aabb())
         .collect();
-    let all: Vec<Aabb> = sim.blocks().iter().map(|b| b.polygon.aabb()).collect();
+    let all: Vec<Aabb> = model.blocks.iter().map(|m| m.polygon.aabb()).collect();
     let b = if free.is_empty() { all } else { free }
         .into_iter()
         .reduce(|a, b| a.union(&b))
@@ -50,8 +126,15 @@ pub fn frame_view(sim: &Simulation) -> Aabb {
     b.expanded(0.25 * b.size().max_element())
 }
 
-/// An SVG picture of the blocks now, in the fixed `view` (y up), fixed blocks grey.
-pub fn frame_svg(sim: &Simulation, view: &Aabb) -> String {
+/// The rounding of frame coordinates for a run shown in `view`: a millionth of its size.
+pub fn frame_resolution(view: &Aabb) -> f64 {
+    let size = view.size().max_element().max(f64::MIN_POSITIVE);
+    10f64.powi((size * 1e-6).log10().floor() as i32)
+}
+
+/// An SVG picture of `frame` of a run of `model`, in the fixed `view` (y up), fixed
+/// blocks grey.
+pub fn frame_svg(model: &Model, frame: &Frame, view: &Aabb) -> String {
     let size = view.size();
     let width = 800.0;
     let height = (width * size.y / size.x).clamp(100.0, 4000.0);
@@ -65,16 +148,14 @@ pub fn frame_svg(sim: &Simulation, view: &Aabb) -> String {
     let _ = writeln!(
         s,
         r#"<title>{} t = {:.4} s</title><g stroke="black" stroke-width="{stroke}" stroke-linejoin="round">"#,
-        escape(&sim.model().name),
-        sim.time()
+        escape(&model.name),
+        frame.t
     );
-    for (b, m) in sim.blocks().iter().zip(&sim.model().blocks) {
+    for (i, m) in model.blocks.iter().enumerate() {
         let fill = if m.fixed { "#b0b0b0" } else { "#e8c890" };
-        let pts: Vec<String> = b
-            .polygon
-            .vertices()
-            .iter()
-            .map(|v| format!("{:.6},{:.6}", v.x, -v.y))
+        let pts: Vec<String> = frame
+            .polygon(i)
+            .map(|v| format!("{},{}", v.x, -v.y))
             .collect();
         let _ = writeln!(
             s,
@@ -96,7 +177,8 @@ pub fn outcome_svg(
     path: &[DVec2],
     view: &Aabb,
 ) -> String {
-    let mut s = frame_svg(sim, view);
+    let frame = Frame::of(sim, true, frame_resolution(view));
+    let mut s = frame_svg(sim.model(), &frame, view);
     let size = view.size();
     let stroke = 0.6 * size.x / 800.0;
     let mut extra = String::new();
@@ -130,7 +212,8 @@ pub fn outcome_svg(
     s
 }
 
-fn escape(s: &str) -> String {
+/// `s` with the characters HTML and SVG treat specially escaped.
+pub fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")

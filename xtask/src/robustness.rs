@@ -44,7 +44,7 @@ pub fn run(root: &Path) -> Result<(), String> {
                 .validate()
                 .map_err(|e| format!("{}: {}", case.name(), e.message))?;
             let mut sim = Simulation::new(model, RunOptions::default());
-            let view = frame_view(&sim);
+            let view = frame_view(sim.model());
             let view = view.expanded(0.5 * view.size().max_element());
             let start: Vec<_> = sim.blocks().iter().map(|b| b.polygon.clone()).collect();
             let mut path = vec![sim.blocks()[0].polygon.centroid()];

@@ -35,8 +35,10 @@ pub struct OutputMarks {
     pub history_bytes: u64,
     /// Bytes of frames.jsonl written.
     pub frames_bytes: u64,
-    /// Frames written (the next frame's number).
-    pub frames: u32,
+    /// The next instant of the animation grid to record in frames.jsonl.
+    pub animation_next: u64,
+    /// The next instant of the SVG-frame grid (the scene's `frames`) to record.
+    pub svg_next: u64,
     /// Steps between checkpoints (0: only at the end or on failure).
     pub checkpoint_every: u64,
 }

@@ -62,6 +62,16 @@ pub enum SimError {
         /// The solver's error.
         source: SolveError,
     },
+    /// The solution of the global system is not finite (NaN or infinite).
+    #[error(
+        "at t = {t:.6} s: the solution is not finite for block `{block}` (last good state kept)"
+    )]
+    NonFinite {
+        /// Simulated time of the last good state.
+        t: f64,
+        /// Id of the first block with a non-finite motion.
+        block: String,
+    },
     /// A block would be turned inside out by the step.
     #[error("at t = {t:.6} s: block `{block}` would be inverted (last good state kept)")]
     Inverted {
@@ -145,6 +155,42 @@ pub struct BlockState {
     pub loads: Vec<(DVec2, DVec2)>,
     /// Fixed points: current material point, its fixed place.
     pub fixed_points: Vec<(DVec2, DVec2)>,
+}
+
+/// What a failed run was doing when it stopped: which blocks and contacts were involved
+/// and the step size that failed (summary.json's `failure`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Diagnosis {
+    /// The error, in words.
+    pub reason: String,
+    /// Simulated time of the last good state, s.
+    pub t: f64,
+    /// The step size of the last failed attempt, s.
+    pub last_dt: f64,
+    /// Ids of the blocks involved (at most [`DIAGNOSIS_LIMIT`]).
+    pub blocks: Vec<String>,
+    /// The contacts involved (at most [`DIAGNOSIS_LIMIT`]).
+    pub contacts: Vec<ContactNote>,
+}
+
+/// Most blocks and contacts a [`Diagnosis`] lists.
+pub const DIAGNOSIS_LIMIT: usize = 20;
+
+/// A contact named in a [`Diagnosis`].
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ContactNote {
+    /// Id of the block owning the vertex.
+    pub vertex_block: String,
+    /// Vertex index in that block.
+    pub vertex: u32,
+    /// Id of the block owning the edge.
+    pub edge_block: String,
+    /// Edge index in that block (from vertex `edge` to `edge + 1`).
+    pub edge: u32,
+    /// State at the last good state: "open", "locked" or "sliding".
+    pub state: String,
+    /// Normal distance at the start of the failed step, m (negative: penetrating).
+    pub d_n: f64,
 }
 
 /// A block's state in a [`Snapshot`]: its polygon as a plain vertex list (restored bit
@@ -265,6 +311,10 @@ pub struct Simulation {
     d: Vec<Vec6>,
     /// The trial motion of each block as a map of its points.
     motions: Vec<Motion>,
+    /// Contacts whose state changed in the last OCI iteration (for a diagnosis).
+    flipped: Vec<u32>,
+    /// Why the run stopped, once it has.
+    diagnosis: Option<Diagnosis>,
 }
 
 impl std::fmt::Debug for Simulation {
@@ -350,6 +400,8 @@ impl Simulation {
             mass: Vec::new(),
             d: vec![[0.0; 6]; n],
             motions: Vec::with_capacity(n),
+            flipped: Vec::new(),
+            diagnosis: None,
         }
     }
 
@@ -525,6 +577,11 @@ impl Simulation {
         Ok(sim)
     }
 
+    /// Why the run stopped, once a step has failed: the blocks and contacts involved.
+    pub fn diagnosis(&self) -> Option<&Diagnosis> {
+        self.diagnosis.as_ref()
+    }
+
     /// Runs to the scene's duration, calling `on_step` after every step.
     pub fn run(
         &mut self,
@@ -537,8 +594,26 @@ impl Simulation {
         Ok(())
     }
 
-    /// Advances one step (with as many retries as the time-step control needs).
+    /// Advances one step (with as many retries as the time-step control needs). On an
+    /// error the state stays at the last completed step and [`Simulation::diagnosis`]
+    /// says what was involved.
     pub fn step(&mut self) -> Result<StepRecord, SimError> {
+        let mut last_dt = self.dt;
+        let mut worst = None;
+        let result = self.try_step(&mut last_dt, &mut worst);
+        if let Err(e) = &result {
+            self.diagnose(e, last_dt, worst);
+        }
+        result
+    }
+
+    /// [`Simulation::step`], reporting the last attempted step size and the block that
+    /// moved most in the last attempt.
+    fn try_step(
+        &mut self,
+        last_dt: &mut f64,
+        worst: &mut Option<usize>,
+    ) -> Result<StepRecord, SimError> {
         let started = Instant::now();
         let mut rec = StepRecord::default();
         let t_det = Instant::now();
@@ -564,6 +639,7 @@ impl Simulation {
 
         let mut first_attempt = true;
         loop {
+            *last_dt = dt;
             let t_asm = Instant::now();
             self.base_terms(dt);
             rec.assembly_s += t_asm.elapsed().as_secs_f64();
@@ -577,7 +653,8 @@ impl Simulation {
             self.totals.oci_iterations += iterations as u64;
             let reason;
             if converged {
-                let (disp, rot) = self.largest_motion();
+                let (disp, rot, moved_most) = self.largest_motion();
+                *worst = moved_most;
                 if disp <= p.d_max && rot <= p.theta_max {
                     rec.oci = iterations;
                     let easy = iterations <= p.max_oci.div_ceil(2) && disp <= 0.5 * p.d_max;
@@ -1042,6 +1119,12 @@ impl Simulation {
             self.solve_states(rec)?;
             let t2 = Instant::now();
             self.gather_solution();
+            if let Some(i) = (0..self.d.len()).find(|&i| self.d[i].iter().any(|x| !x.is_finite())) {
+                return Err(SimError::NonFinite {
+                    t: self.t,
+                    block: self.model.blocks[i].id.clone(),
+                });
+            }
             let mut changed = self.update_states();
             rec.assembly_s += t2.elapsed().as_secs_f64();
             let t3 = Instant::now();
@@ -1099,6 +1182,7 @@ impl Simulation {
         // band, p * 1e-9 d_tol, is negligible (our choice; the paper is silent).
         let open_band = 1e-9 * p.d_tol;
         let mut changed = 0;
+        self.flipped.clear();
         for k in 0..self.contacts.contacts.len() {
             let c = self.contacts.contacts[k];
             if !c.active {
@@ -1167,6 +1251,7 @@ impl Simulation {
             }
             if n.state != c.state || n.slide_dir != c.slide_dir {
                 changed += 1;
+                self.flipped.push(k as u32);
             }
             self.contacts.contacts[k] = n;
         }
@@ -1186,19 +1271,27 @@ impl Simulation {
 
     /// Largest vertex displacement (first order) and largest |rotation| of the trial
     /// solution.
-    fn largest_motion(&self) -> (f64, f64) {
+    fn largest_motion(&self) -> (f64, f64, Option<usize>) {
         let (mut disp, mut rot) = (0.0f64, 0.0f64);
+        let (mut worst, mut worst_ratio) = (None, 0.0);
+        let p = &self.model.params;
         for (i, s) in self.shapes.iter().enumerate() {
             if self.free[i].is_none() {
                 continue;
             }
             let d = &self.d[i];
             rot = rot.max(d[2].abs());
+            let mut block_disp = 0.0f64;
             for &v in &s.vertices {
-                disp = disp.max(point_displacement(v, s.centroid, d).length());
+                block_disp = block_disp.max(point_displacement(v, s.centroid, d).length());
+            }
+            disp = disp.max(block_disp);
+            let ratio = (block_disp / p.d_max).max(d[2].abs() / p.theta_max);
+            if ratio > worst_ratio {
+                (worst, worst_ratio) = (Some(i), ratio);
             }
         }
-        (disp, rot)
+        (disp, rot, worst)
     }
 
     /// Commits the trial solution: moves blocks, updates stresses and velocities, and
@@ -1265,6 +1358,75 @@ impl Simulation {
         }
         self.t += dt;
         Ok(())
+    }
+
+    /// Records what was involved in the failure `e`: for an OCI that did not converge,
+    /// the contacts still changing state and their blocks; for a step too large, the
+    /// block that moved most; for an inverted or non-finite block, that block and its
+    /// contacts.
+    fn diagnose(&mut self, e: &SimError, last_dt: f64, worst: Option<usize>) {
+        let index = |id: &str| self.model.blocks.iter().position(|b| b.id == id);
+        let mut blocks: Vec<usize> = Vec::new();
+        let mut contacts: Vec<usize> = Vec::new();
+        match e {
+            SimError::TimeStepCollapsed { reason, .. } if reason.contains("open-close") => {
+                contacts.extend(self.flipped.iter().map(|&k| k as usize));
+            }
+            SimError::TimeStepCollapsed { .. } => blocks.extend(worst),
+            SimError::Inverted { block, .. } | SimError::NonFinite { block, .. } => {
+                blocks.extend(index(block));
+            }
+            _ => {}
+        }
+        if contacts.is_empty() {
+            // The closed contacts of the blocks named.
+            contacts.extend((0..self.contacts.len()).filter(|&k| {
+                let c = &self.contacts.contacts[k];
+                let key = c.key;
+                c.active
+                    && c.state.is_closed()
+                    && blocks
+                        .iter()
+                        .any(|&b| b == key.vertex_block as usize || b == key.edge_block as usize)
+            }));
+        }
+        contacts.truncate(DIAGNOSIS_LIMIT);
+        for &k in &contacts {
+            let key = self.contacts.contacts.get(k).map(|c| c.key);
+            if let Some(key) = key {
+                for b in [key.vertex_block as usize, key.edge_block as usize] {
+                    if !blocks.contains(&b) {
+                        blocks.push(b);
+                    }
+                }
+            }
+        }
+        blocks.truncate(DIAGNOSIS_LIMIT);
+        let id = |b: usize| self.model.blocks[b].id.clone();
+        let notes = contacts
+            .iter()
+            .filter_map(|&k| self.contacts.contacts.get(k))
+            .map(|c| ContactNote {
+                vertex_block: id(c.key.vertex_block as usize),
+                vertex: c.key.vertex,
+                edge_block: id(c.key.edge_block as usize),
+                edge: c.key.edge,
+                state: match c.state {
+                    ContactState::Open => "open",
+                    ContactState::Locked => "locked",
+                    ContactState::Sliding => "sliding",
+                }
+                .to_string(),
+                d_n: c.d_n,
+            })
+            .collect();
+        self.diagnosis = Some(Diagnosis {
+            reason: e.to_string(),
+            t: self.t,
+            last_dt,
+            blocks: blocks.into_iter().map(id).collect(),
+            contacts: notes,
+        });
     }
 
     /// Kinetic energy of the free blocks, 1/2 V^T M V.

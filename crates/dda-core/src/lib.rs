@@ -22,7 +22,8 @@ pub mod system;
 pub use self::checkpoint::{Checkpoint, CheckpointError, OutputMarks};
 pub use self::effects::Effects;
 pub use self::engine::{
-    BlockSnapshot, BlockState, RunOptions, SimError, Simulation, Snapshot, StepRecord, Totals,
+    BlockSnapshot, BlockState, ContactNote, Diagnosis, RunOptions, SimError, Simulation, Snapshot,
+    StepRecord, Totals,
 };
 pub use self::locate::LineIndex;
 pub use self::scene::{Format, Invalid, Model, Scene, SceneError};

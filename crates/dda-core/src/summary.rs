@@ -44,6 +44,9 @@ pub struct Summary {
     /// Why the run stopped early, if it did.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
+    /// What was involved when the run stopped early, if it did.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub failure: Option<crate::engine::Diagnosis>,
     /// Simulated time reached, s.
     pub time_simulated: f64,
     /// Completed steps.
@@ -95,6 +98,7 @@ impl Summary {
                 "completed"
             }
             .to_string(),
+            failure: error.as_ref().and_then(|_| sim.diagnosis().cloned()),
             error,
             time_simulated: sim.time(),
             steps: t.steps,

@@ -1,0 +1,363 @@
+//! report.html: one self-contained page (no network) per run: an animation of the
+//! blocks (play/pause, a time slider, blocks coloured by speed, fixed blocks grey, active
+//! contacts marked), time histories, the summary with any failure diagnosis, and the
+//! effects and parameters used.
+
+use super::{Frame, escape, plot};
+use dda_core::{Model, Scene, Summary};
+use dda_geom::Aabb;
+use std::fmt::Write as _;
+
+/// One row of history.csv, the columns the report plots.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct HistoryRow {
+    /// Simulated time at the end of the step, s.
+    pub t: f64,
+    /// Step size, s.
+    pub dt: f64,
+    /// OCI iterations of the step.
+    pub oci: f64,
+    /// Active contacts after the step.
+    pub active_contacts: f64,
+    /// Largest penetration after the step, m.
+    pub max_penetration: f64,
+    /// Kinetic energy after the step, J.
+    pub kinetic_energy: f64,
+}
+
+/// Reads history.csv (with its header); errors name the line.
+pub fn parse_history(text: &str) -> Result<Vec<HistoryRow>, String> {
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
+    let col = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .ok_or_else(|| format!("line 1: no column `{name}`"))
+    };
+    let cols = [
+        col("t")?,
+        col("dt")?,
+        col("oci")?,
+        col("active_contacts")?,
+        col("max_penetration")?,
+        col("kinetic_energy")?,
+    ];
+    let mut rows = Vec::new();
+    for (k, line) in lines.enumerate() {
+        let fields: Vec<&str> = line.split(',').collect();
+        let mut v = [0.0; 6];
+        for (slot, &c) in v.iter_mut().zip(&cols) {
+            *slot = fields
+                .get(c)
+                .and_then(|f| f.parse::<f64>().ok())
+                .ok_or_else(|| format!("line {}: column {} is not a number", k + 2, c + 1))?;
+        }
+        rows.push(HistoryRow {
+            t: v[0],
+            dt: v[1],
+            oci: v[2],
+            active_contacts: v[3],
+            max_penetration: v[4],
+            kinetic_energy: v[5],
+        });
+    }
+    Ok(rows)
+}
+
+/// What report.html shows.
+#[derive(Debug)]
+pub struct Report<'a> {
+    /// The scene as run (its analysis table is shown).
+    pub scene: &'a Scene,
+    /// The validated scene.
+    pub model: &'a Model,
+    /// summary.json.
+    pub summary: &'a Summary,
+    /// history.csv.
+    pub history: &'a [HistoryRow],
+    /// frames.jsonl.
+    pub frames: &'a [Frame],
+    /// The box the animation shows.
+    pub view: Aabb,
+}
+
+/// Most points a time-history plot draws (longer histories are thinned evenly).
+const PLOT_POINTS: usize = 1500;
+
+/// The page, self-contained.
+pub fn report_html(r: &Report) -> String {
+    let s = r.summary;
+    let mut page = String::new();
+    let title = format!("dda: {}", escape(&s.scene));
+    let _ = write!(
+        page,
+        r#"<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>{title}</title>
+<style>
+body {{ font-family: sans-serif; margin: 1.5em; max-width: 1100px; }}
+table {{ border-collapse: collapse; margin-bottom: 1em; }}
+td, th {{ border: 1px solid #ccc; padding: 2px 8px; text-align: left; }}
+.failed {{ color: #b00020; }}
+#controls {{ display: flex; gap: 1em; align-items: center; margin: 0.5em 0; }}
+#slider {{ flex: 1; }}
+canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
+.plots {{ display: flex; flex-wrap: wrap; gap: 0.5em; }}
+.plots svg {{ width: 540px; height: auto; }}
+</style></head><body>
+<h1>{title}</h1>
+"#
+    );
+    let status_class = if s.status == "completed" {
+        ""
+    } else {
+        "failed"
+    };
+    let _ = writeln!(
+        page,
+        r#"<p class="{status_class}" id="status">{}: {} s simulated in {} steps ({} OCI iterations), detector {}, {:.3} s wall.</p>"#,
+        escape(&s.status),
+        s.time_simulated,
+        s.steps,
+        s.oci_iterations,
+        escape(&s.detector),
+        s.seconds.total
+    );
+    if let Some(f) = &s.failure {
+        let _ = writeln!(
+            page,
+            r#"<h2 class="failed">Why the run stopped</h2><p class="failed">{}</p>
+<p>Last good state at t = {} s; the last step size tried was {:.3e} s. Blocks involved: {}.</p>"#,
+            escape(&f.reason),
+            f.t,
+            f.last_dt,
+            if f.blocks.is_empty() {
+                "none singled out".to_string()
+            } else {
+                escape(&f.blocks.join(", "))
+            }
+        );
+        if !f.contacts.is_empty() {
+            page.push_str(
+                "<table><tr><th>vertex block</th><th>vertex</th><th>edge block</th>\
+                 <th>edge</th><th>state</th><th>d_n (m)</th></tr>\n",
+            );
+            for c in &f.contacts {
+                let _ = writeln!(
+                    page,
+                    "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.3e}</td></tr>",
+                    escape(&c.vertex_block),
+                    c.vertex,
+                    escape(&c.edge_block),
+                    c.edge,
+                    escape(&c.state),
+                    c.d_n
+                );
+            }
+            page.push_str("</table>\n");
+        }
+    }
+
+    // The animation.
+    let size = r.view.size();
+    let (cw, ch) = (800.0, (800.0 * size.y / size.x).clamp(150.0, 900.0));
+    let _ = writeln!(
+        page,
+        r#"<h2>Animation</h2>
+<div id="controls"><button id="play" type="button">Play</button>
+<input id="slider" type="range" min="0" max="{}" value="0" step="1" aria-label="time">
+<span id="time"></span></div>
+<canvas id="view" width="{cw:.0}" height="{ch:.0}"></canvas>
+<p>Blocks coloured by speed, from blue (at rest) to red (<span id="vmax"></span> m/s); fixed blocks grey; red dots: active closed contacts.</p>"#,
+        r.frames.len().saturating_sub(1)
+    );
+
+    // Time histories.
+    let h = thin(r.history);
+    let series = |f: fn(&HistoryRow) -> f64| -> Vec<(String, Vec<(f64, f64)>)> {
+        vec![(String::new(), h.iter().map(|r| (r.t, f(r))).collect())]
+    };
+    page.push_str("<h2>Time histories</h2>\n<div class=\"plots\">\n");
+    for (title, ylabel, f) in [
+        (
+            "Kinetic energy",
+            "J",
+            (|r: &HistoryRow| r.kinetic_energy) as fn(&HistoryRow) -> f64,
+        ),
+        ("Time step", "dt (s)", |r: &HistoryRow| r.dt),
+        ("OCI iterations per step", "iterations", |r: &HistoryRow| {
+            r.oci
+        }),
+        ("Active contacts", "contacts", |r: &HistoryRow| {
+            r.active_contacts
+        }),
+        ("Largest penetration", "mm", |r: &HistoryRow| {
+            1e3 * r.max_penetration
+        }),
+    ] {
+        page.push_str(&plot(title, "t (s)", ylabel, &series(f), true, false));
+    }
+    page.push_str("</div>\n");
+
+    // Summary and parameters.
+    page.push_str("<h2>Summary</h2>\n<table>\n");
+    let rows: [(&str, String); 12] = [
+        ("scene", s.scene.clone()),
+        ("detector", s.detector.clone()),
+        ("status", s.status.clone()),
+        ("simulated time (s)", s.time_simulated.to_string()),
+        ("steps", s.steps.to_string()),
+        ("OCI iterations", s.oci_iterations.to_string()),
+        ("time-step cuts", s.time_step_cuts.to_string()),
+        ("unknowns", s.unknowns.to_string()),
+        (
+            "factorisations (symbolic / numeric / low-rank solves)",
+            format!(
+                "{} / {} / {}",
+                s.symbolic_factorisations, s.numeric_factorisations, s.low_rank_solves
+            ),
+        ),
+        (
+            "wall seconds (total / detection / assembly / solve)",
+            format!(
+                "{:.3} / {:.3} / {:.3} / {:.3}",
+                s.seconds.total, s.seconds.contact_detection, s.seconds.assembly, s.seconds.solve
+            ),
+        ),
+        ("max penetration (m)", format!("{:.3e}", s.max_penetration)),
+        ("blocks", r.model.blocks.len().to_string()),
+    ];
+    for (k, v) in rows {
+        let _ = writeln!(page, "<tr><th>{k}</th><td>{}</td></tr>", escape(&v));
+    }
+    page.push_str("</table>\n<h2>Effects and parameters</h2>\n<table>\n");
+    let _ = writeln!(
+        page,
+        "<tr><th>effects assembled</th><td>{}</td></tr>",
+        escape(&s.effects.join(", "))
+    );
+    let p = &r.model.params;
+    for (k, v) in [
+        ("contact tolerance d_tol (m)", p.d_tol.to_string()),
+        ("max displacement d_max (m)", p.d_max.to_string()),
+    ] {
+        let _ = writeln!(page, "<tr><th>{k}</th><td>{}</td></tr>", escape(&v));
+    }
+    if let Ok(serde_json::Value::Object(analysis)) = serde_json::to_value(&r.scene.analysis) {
+        for (k, v) in analysis {
+            if v.is_null() {
+                continue;
+            }
+            let _ = writeln!(
+                page,
+                "<tr><th>analysis.{}</th><td>{}</td></tr>",
+                escape(&k),
+                escape(&v.to_string())
+            );
+        }
+    }
+    page.push_str("</table>\n");
+
+    // Data and script.
+    let data = serde_json::json!({
+        "view": [r.view.min.x, r.view.min.y, r.view.max.x, r.view.max.y],
+        "fixed": r.model.blocks.iter().map(|b| b.fixed).collect::<Vec<_>>(),
+        "ids": r.model.blocks.iter().map(|b| b.id.as_str()).collect::<Vec<_>>(),
+        "frames": r.frames,
+    });
+    // "</" cannot appear inside a script element.
+    let data = data.to_string().replace("</", "<\\/");
+    let _ = write!(
+        page,
+        "<script id=\"data\" type=\"application/json\">{data}</script>\n<script>\n{SCRIPT}</script>\n</body></html>\n"
+    );
+    page
+}
+
+/// At most [`PLOT_POINTS`] rows, evenly spread, the last one kept.
+fn thin(h: &[HistoryRow]) -> Vec<HistoryRow> {
+    if h.len() <= PLOT_POINTS {
+        return h.to_vec();
+    }
+    let stride = h.len().div_ceil(PLOT_POINTS);
+    let mut v: Vec<HistoryRow> = h.iter().step_by(stride).copied().collect();
+    if let Some(last) = h.last()
+        && v.last() != Some(last)
+    {
+        v.push(*last);
+    }
+    v
+}
+
+/// The page's script: draws frame k of the data on the canvas; play/pause and the slider
+/// move k. `window.ddaReport` exposes the current frame for tests.
+const SCRIPT: &str = r##""use strict";
+(function () {
+  const data = JSON.parse(document.getElementById("data").textContent);
+  const frames = data.frames;
+  const canvas = document.getElementById("view");
+  const ctx = canvas.getContext("2d");
+  const slider = document.getElementById("slider");
+  const play = document.getElementById("play");
+  const label = document.getElementById("time");
+  const [x0, y0, x1, y1] = data.view;
+  const sx = canvas.width / (x1 - x0), sy = canvas.height / (y1 - y0);
+  const scale = Math.min(sx, sy);
+  const px = (x) => (x - x0) * scale;
+  const py = (y) => canvas.height - (y - y0) * scale;
+  let vmax = 0;
+  for (const f of frames) {
+    f.speed.forEach((v, i) => { if (!data.fixed[i] && v > vmax) vmax = v; });
+  }
+  document.getElementById("vmax").textContent = vmax.toPrecision(3);
+  const colour = (v) => {
+    const s = vmax > 0 ? Math.min(v / vmax, 1) : 0;
+    return "hsl(" + (240 - 240 * s).toFixed(0) + ", 75%, 60%)";
+  };
+  let k = 0;
+  let timer = null;
+  function draw() {
+    const f = frames[k];
+    ctx.fillStyle = "#ffffff";
+    ctx.fillRect(0, 0, canvas.width, canvas.height);
+    ctx.lineWidth = 0.6;
+    ctx.strokeStyle = "#000000";
+    f.blocks.forEach((b, i) => {
+      ctx.beginPath();
+      for (let j = 0; j < b.length; j += 2) {
+        if (j === 0) ctx.moveTo(px(b[j]), py(b[j + 1]));
+        else ctx.lineTo(px(b[j]), py(b[j + 1]));
+      }
+      ctx.closePath();
+      ctx.fillStyle = data.fixed[i] ? "#b0b0b0" : colour(f.speed[i]);
+      ctx.fill();
+      ctx.stroke();
+    });
+    ctx.fillStyle = "#d00000";
+    for (let j = 0; j < f.contacts.length; j += 2) {
+      ctx.beginPath();
+      ctx.arc(px(f.contacts[j]), py(f.contacts[j + 1]), 2.5, 0, 2 * Math.PI);
+      ctx.fill();
+    }
+    slider.value = String(k);
+    label.textContent = "t = " + f.t.toFixed(4) + " s  (frame " + (k + 1) + " of " + frames.length + ")";
+  }
+  function stop() {
+    if (timer !== null) { clearInterval(timer); timer = null; }
+    play.textContent = "Play";
+  }
+  function start() {
+    if (k >= frames.length - 1) k = 0;
+    play.textContent = "Pause";
+    timer = setInterval(() => {
+      if (k >= frames.length - 1) { stop(); return; }
+      k += 1;
+      draw();
+    }, 50);
+  }
+  play.addEventListener("click", () => { if (timer === null) start(); else stop(); });
+  slider.addEventListener("input", () => { stop(); k = Number(slider.value); draw(); });
+  window.ddaReport = { frame: () => k, frames: frames.length, playing: () => timer !== null };
+  if (frames.length > 0) draw();
+})();
+"##;

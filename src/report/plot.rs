@@ -1,0 +1,98 @@
+//! SVG line and point plots, for run reports and sweeps.
+
+use super::escape;
+use std::fmt::Write as _;
+
+/// An SVG plot of named series of (x, y) points on linear axes: joined by lines if
+/// `lines`, with a dot at each point if `dots`.
+pub fn plot(
+    title: &str,
+    xlabel: &str,
+    ylabel: &str,
+    series: &[(String, Vec<(f64, f64)>)],
+    lines: bool,
+    dots: bool,
+) -> String {
+    let (w, h, m) = (640.0, 400.0, 60.0);
+    let pts = series.iter().flat_map(|(_, p)| p.iter());
+    let (mut x0, mut x1, mut y0, mut y1) =
+        (f64::INFINITY, f64::NEG_INFINITY, 0.0f64, f64::NEG_INFINITY);
+    for &(x, y) in pts {
+        x0 = x0.min(x);
+        x1 = x1.max(x);
+        y0 = y0.min(y);
+        y1 = y1.max(y);
+    }
+    // Empty or flat ranges (or NaN) get a unit span.
+    if x1.partial_cmp(&x0) != Some(std::cmp::Ordering::Greater) {
+        x1 = x0 + 1.0;
+    }
+    if y1.partial_cmp(&y0) != Some(std::cmp::Ordering::Greater) {
+        y1 = y0 + 1.0;
+    }
+    let sx = |x: f64| m + (x - x0) / (x1 - x0) * (w - 2.0 * m);
+    let sy = |y: f64| h - m - (y - y0) / (y1 - y0) * (h - 2.0 * m);
+    let colours = [
+        "#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b",
+    ];
+    let mut s = format!(
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="sans-serif" font-size="12">
+<rect width="{w}" height="{h}" fill="white"/>
+<text x="{}" y="20" text-anchor="middle" font-size="14">{}</text>
+<line x1="{m}" y1="{}" x2="{}" y2="{}" stroke="black"/><line x1="{m}" y1="{m}" x2="{m}" y2="{}" stroke="black"/>
+<text x="{}" y="{}" text-anchor="middle">{}</text>
+<text x="15" y="{}" transform="rotate(-90 15 {})" text-anchor="middle">{}</text>
+<text x="{m}" y="{}" text-anchor="middle">{x0:.3}</text><text x="{}" y="{}" text-anchor="middle">{x1:.3}</text>
+<text x="{}" y="{}" text-anchor="end">{y0:.3}</text><text x="{}" y="{m}" text-anchor="end">{y1:.3}</text>
+"#,
+        w / 2.0,
+        escape(title),
+        h - m,
+        w - m,
+        h - m,
+        h - m,
+        w / 2.0,
+        h - 15.0,
+        escape(xlabel),
+        h / 2.0,
+        h / 2.0,
+        escape(ylabel),
+        h - m + 15.0,
+        w - m,
+        h - m + 15.0,
+        m - 5.0,
+        h - m,
+        m - 5.0,
+    );
+    for (k, (name, p)) in series.iter().enumerate() {
+        let c = colours[k % colours.len()];
+        if lines {
+            let line: Vec<String> = p
+                .iter()
+                .map(|&(x, y)| format!("{:.1},{:.1}", sx(x), sy(y)))
+                .collect();
+            let _ = writeln!(
+                s,
+                r#"<polyline fill="none" stroke="{c}" stroke-width="2" points="{}"/>"#,
+                line.join(" ")
+            );
+        }
+        for &(x, y) in p.iter().filter(|_| dots) {
+            let _ = writeln!(
+                s,
+                r#"<circle cx="{:.1}" cy="{:.1}" r="3" fill="{c}"/>"#,
+                sx(x),
+                sy(y)
+            );
+        }
+        let _ = writeln!(
+            s,
+            r#"<text x="{}" y="{}" fill="{c}">{}</text>"#,
+            w - m + 5.0 - 120.0,
+            m + 15.0 * k as f64,
+            escape(name)
+        );
+    }
+    s.push_str("</svg>\n");
+    s
+}
