@@ -56,7 +56,10 @@ pub struct Frame {
 impl Frame {
     /// The blocks and contacts of `sim` now, coordinates rounded to `resolution` (m).
     pub fn of(sim: &Simulation, svg: bool, resolution: f64) -> Frame {
-        let round = |x: f64| (x / resolution).round() * resolution;
+        // Dividing by a whole power of ten gives the double nearest the rounded decimal,
+        // which prints short.
+        let per_metre = (1.0 / resolution).round().max(1.0);
+        let round = |x: f64| (x * per_metre).round() / per_metre;
         let blocks = sim
             .blocks()
             .iter()

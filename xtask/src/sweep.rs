@@ -307,10 +307,53 @@ fn write_files(out: &Path, rows: &[Row]) -> Result<(), String> {
         "sweep.json",
         serde_json::to_string_pretty(rows).map_err(|e| e.to_string())?,
     )?;
-    write("speedup.svg", speedup_plot(rows))?;
-    write("steps.svg", counts_plot(rows))?;
-    write("accuracy.svg", accuracy_plot(rows))?;
+    let plots = [
+        ("speedup.svg", speedup_plot(rows)),
+        ("steps.svg", counts_plot(rows)),
+        ("accuracy.svg", accuracy_plot(rows)),
+    ];
+    let mut html = String::from(
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\
+         <title>dda sweep</title><style>body { font-family: sans-serif; margin: 1.5em; } \
+         table { border-collapse: collapse; font-size: 13px; } \
+         td, th { border: 1px solid #ccc; padding: 2px 6px; text-align: right; }</style>\
+         </head><body>\n<h1>Sweep: steps, OCI cycles and detection cost against r_tol</h1>\n",
+    );
+    html.push_str(&table_html(&table(rows)));
+    let _ = writeln!(
+        html,
+        "<p>Raw data: <a href=\"sweep.csv\">sweep.csv</a>, <a href=\"sweep.json\">sweep.json</a>.</p>"
+    );
+    for (name, svg) in plots {
+        html.push_str(&svg);
+        write(name, svg)?;
+    }
+    html.push_str("</body></html>\n");
+    write("sweep.html", html)?;
     Ok(())
+}
+
+/// A Markdown table (as [`table`] writes it) as an HTML table; `**x**` cells in bold.
+fn table_html(markdown: &str) -> String {
+    let mut s = String::from("<table>\n");
+    for (k, line) in markdown.lines().enumerate() {
+        if line.starts_with("|---") {
+            continue;
+        }
+        let tag = if k == 0 { "th" } else { "td" };
+        s.push_str("<tr>");
+        for cell in line.trim().trim_matches('|').split('|') {
+            let cell = dda::report::escape(cell.trim());
+            let cell = match cell.strip_prefix("**").and_then(|c| c.strip_suffix("**")) {
+                Some(bold) => format!("<b>{bold}</b>"),
+                None => cell,
+            };
+            let _ = write!(s, "<{tag}>{cell}</{tag}>");
+        }
+        s.push_str("</tr>\n");
+    }
+    s.push_str("</table>\n");
+    s
 }
 
 /// The paper's Tables 4 and 5 layout: per model, total steps, OCI cycles and detection
