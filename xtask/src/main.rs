@@ -4,7 +4,10 @@
 //!   `docs/robustness.md`.
 //! - `sweep`: the paper's section 5 columns over detectors and r_tol: steps, OCI cycles,
 //!   seconds and accuracy as CSV, JSON, a table and plots.
+//! - `accuracy`: error against wall time on problems with a closed-form answer, and the
+//!   columns' penetration and energy against time, into `docs/accuracy.md`.
 
+mod accuracy;
 mod robustness;
 mod sweep;
 
@@ -22,7 +25,7 @@ fn main() -> ExitCode {
     match task.as_deref() {
         None | Some("help" | "--help" | "-h") => {
             println!(
-                "usage: cargo xtask <task>\n\ntasks:\n  robustness   section 4 cases x detectors -> docs/robustness.md\n  sweep [--models 20,93,229,826] [--detectors cover,type-1,type-2] [--rtol 1,2,4,6,8,10] [--jobs N] [--max-steps N] [--out DIR]"
+                "usage: cargo xtask <task>\n\ntasks:\n  robustness   section 4 cases x detectors -> docs/robustness.md\n  accuracy [--out DIR]   error against wall time; the columns' penetration and energy -> docs/accuracy.md\n  sweep [--models 20,93,229,826] [--detectors cover,type-1,type-2] [--rtol 1,2,4,6,8,10] [--jobs N] [--max-steps N] [--out DIR]"
             );
             ExitCode::SUCCESS
         }
@@ -33,6 +36,24 @@ fn main() -> ExitCode {
                 ExitCode::FAILURE
             }
         },
+        Some("accuracy") => {
+            let args: Vec<String> = std::env::args().skip(2).collect();
+            let out = match args.as_slice() {
+                [] => root().join("docs"),
+                [flag, dir] if flag == "--out" => PathBuf::from(dir),
+                _ => {
+                    eprintln!("xtask accuracy: usage: cargo xtask accuracy [--out DIR]");
+                    return ExitCode::from(2);
+                }
+            };
+            match accuracy::run(&out) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("xtask accuracy: {e}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
         Some("sweep") => {
             let args: Vec<String> = std::env::args().skip(2).collect();
             let result = sweep::parse(&args).and_then(|o| sweep::run(&root(), &o));

@@ -2,6 +2,7 @@
 //! hard cases and section 5 columns, and the built-in scenes the `dda` command runs
 //! without a file.
 
+pub mod analytic;
 pub mod builtin;
 pub mod column;
 pub mod hard_cases;
