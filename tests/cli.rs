@@ -439,3 +439,24 @@ fn killed_run_resumes_to_the_uninterrupted_result() {
         );
     }
 }
+
+/// A warning found by validation names the file and the line of its key, like an error.
+#[test]
+fn warnings_name_file_and_line() {
+    let dir = scratch("warn");
+    let text = std::fs::read_to_string(SCENE)
+        .unwrap()
+        .replace("contact_tolerance = 0.002", "contact_tolerance = 0.0015");
+    let line = text
+        .lines()
+        .position(|l| l.starts_with("contact_tolerance"))
+        .unwrap()
+        + 1;
+    let file = dir.join("warn.toml");
+    std::fs::write(&file, &text).unwrap();
+    let o = dda(&["check", file.to_str().unwrap()]);
+    assert!(o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("warning"), "{err}");
+    assert!(err.contains(&format!("warn.toml:{line}")), "{err}");
+}

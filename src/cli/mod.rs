@@ -9,7 +9,7 @@ mod render;
 mod run;
 
 use clap::{Parser, Subcommand};
-use dda_core::{Model, Scene, SceneError};
+use dda_core::{LineIndex, Model, Scene, SceneError};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -85,9 +85,17 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// A scene as read: the scene, and where its keys are in its file (None for a built-in).
+pub struct Resolved {
+    /// The scene as written, unvalidated.
+    pub scene: Scene,
+    /// The lines of its keys, to name them in errors and warnings found later.
+    pub lines: Option<LineIndex>,
+}
+
 /// Reads a scene: a file if `name` is a path to one (or ends in .toml/.json), else a
-/// built-in scene. Returns the scene as written, unvalidated.
-pub fn resolve_scene(name: Option<&str>) -> Result<Scene, BadInput> {
+/// built-in scene.
+pub fn resolve_scene(name: Option<&str>) -> Result<Resolved, BadInput> {
     let name = name.unwrap_or(dda_bench::DEFAULT_BUILTIN);
     let path = Path::new(name);
     let looks_like_file = path.exists()
@@ -96,22 +104,32 @@ pub fn resolve_scene(name: Option<&str>) -> Result<Scene, BadInput> {
             Some("toml" | "json")
         );
     if looks_like_file {
-        return Ok(Scene::load(path)?.0);
+        let scene = Scene::load(path)?.0;
+        // Scene::load has read and parsed the file; read again only to locate keys.
+        let lines = std::fs::read_to_string(path).ok().map(|text| {
+            match path.extension().and_then(|e| e.to_str()) {
+                Some("json") => LineIndex::json(&text),
+                _ => LineIndex::toml(&text),
+            }
+        });
+        return Ok(Resolved { scene, lines });
     }
-    dda_bench::builtin(name).ok_or_else(|| {
-        BadInput(format!(
-            "`{name}` is neither a scene file nor a built-in scene (`dda scenes` lists them)"
-        ))
-    })
+    dda_bench::builtin(name)
+        .map(|scene| Resolved { scene, lines: None })
+        .ok_or_else(|| {
+            BadInput(format!(
+                "`{name}` is neither a scene file nor a built-in scene (`dda scenes` lists them)"
+            ))
+        })
 }
 
-/// Validates `scene`, naming `source` (the file or built-in) in errors; prints its
-/// warnings on stderr.
-pub fn validate(scene: &Scene, source: &str) -> Result<Model, BadInput> {
+/// Validates `scene`, naming `source` (the file or built-in) and, where `lines` knows
+/// it, the line of the key in errors; prints its warnings on stderr the same way.
+pub fn validate(scene: &Scene, source: &str, lines: Option<&LineIndex>) -> Result<Model, BadInput> {
     let at = |key: String, message: String| SceneError {
         file: source.to_string(),
+        line: lines.and_then(|l| l.line(&key)),
         key,
-        line: None,
         message,
     };
     let model = scene
@@ -124,8 +142,8 @@ pub fn validate(scene: &Scene, source: &str) -> Result<Model, BadInput> {
 }
 
 fn check(name: &str) -> Result<ExitCode, BadInput> {
-    let scene = resolve_scene(Some(name))?;
-    let model = validate(&scene, name)?;
+    let Resolved { scene, lines } = resolve_scene(Some(name))?;
+    let model = validate(&scene, name, lines.as_ref())?;
     let effects = dda_core::Effects::of(&model);
     println!(
         "{name}: ok: scene `{}`, {} blocks, detector {}, effects: {}",

@@ -80,7 +80,7 @@ pub fn render(dir: &Path) -> Result<ExitCode, BadInput> {
     let scene_path = dir.join("scene.json");
     let scene: Scene = serde_json::from_str(&read(&scene_path)?)
         .map_err(|e| BadInput(format!("{}: {e}", scene_path.display())))?;
-    let model = validate(&scene, &scene_path.display().to_string())?;
+    let model = validate(&scene, &scene_path.display().to_string(), None)?;
     let summary_path = dir.join("summary.json");
     let summary: Summary = serde_json::from_str(&read(&summary_path)?)
         .map_err(|e| BadInput(format!("{}: {e}", summary_path.display())))?;

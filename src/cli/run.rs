@@ -12,7 +12,7 @@
 //! checkpoint.bin.
 
 use super::render::{render_outputs, write_new};
-use super::{BadInput, default_out, resolve_scene, validate};
+use super::{BadInput, Resolved, default_out, resolve_scene, validate};
 use clap::Args;
 use dda::report::{Frame, HISTORY_HEADER, frame_resolution, frame_view, history_row};
 use dda_core::{Checkpoint, OutputMarks, RunOptions, Scene, Simulation, Summary};
@@ -84,7 +84,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode, BadInput> {
         .scene
         .clone()
         .unwrap_or_else(|| dda_bench::DEFAULT_BUILTIN.to_string());
-    let mut scene = resolve_scene(args.scene.as_deref())?;
+    let Resolved { mut scene, lines } = resolve_scene(args.scene.as_deref())?;
     if let Some(d) = &args.detector {
         scene.analysis.detector = d.clone();
     }
@@ -99,7 +99,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode, BadInput> {
     if args.checkpoint_every == Some(0) {
         return Err(BadInput("--checkpoint-every must be at least 1".into()));
     }
-    let model = validate(&scene, &source)?;
+    let model = validate(&scene, &source, lines.as_ref())?;
     let out = args.out.clone().unwrap_or_else(|| default_out(&scene));
     let work = staging_dir(&out);
     if work.join(CHECKPOINT_FILE).exists() {
@@ -153,7 +153,7 @@ pub fn resume(args: ResumeArgs) -> Result<ExitCode, BadInput> {
     }
     let ck = Checkpoint::load(&path).map_err(|e| BadInput(e.to_string()))?;
     let scene = ck.scene(&path).map_err(|e| BadInput(e.to_string()))?;
-    let model = validate(&scene, &path.display().to_string())?;
+    let model = validate(&scene, &path.display().to_string(), None)?;
     let marks = ck.outputs.clone();
     let sim = ck
         .resume(model, RunOptions::default(), &path)

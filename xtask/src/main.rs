@@ -4,11 +4,14 @@
 //!   `docs/robustness.md`.
 //! - `sweep`: the paper's section 5 columns over detectors and r_tol: steps, OCI cycles,
 //!   seconds and accuracy as CSV, JSON, a table and plots.
+//! - `scaling`: time per step against the number of blocks (columns up to 100k blocks),
+//!   into `docs/scaling.md`.
 //! - `accuracy`: error against wall time on problems with a closed-form answer, and the
 //!   columns' penetration and energy against time, into `docs/accuracy.md`.
 
 mod accuracy;
 mod robustness;
+mod scaling;
 mod sweep;
 
 use std::path::PathBuf;
@@ -25,7 +28,7 @@ fn main() -> ExitCode {
     match task.as_deref() {
         None | Some("help" | "--help" | "-h") => {
             println!(
-                "usage: cargo xtask <task>\n\ntasks:\n  robustness   section 4 cases x detectors -> docs/robustness.md\n  accuracy [--out DIR]   error against wall time; the columns' penetration and energy -> docs/accuracy.md\n  sweep [--models 20,93,229,826] [--detectors cover,type-1,type-2] [--rtol 1,2,4,6,8,10] [--jobs N] [--max-steps N] [--out DIR]"
+                "usage: cargo xtask <task>\n\ntasks:\n  robustness   section 4 cases x detectors -> docs/robustness.md\n  scaling [--blocks 826,3300,10000,30000,100000] [--duration 0.1] [--out DIR]   time per step against blocks -> docs/scaling.md\n  accuracy [--out DIR]   error against wall time; the columns' penetration and energy -> docs/accuracy.md\n  sweep [--models 20,93,229,826] [--detectors cover,type-1,type-2] [--rtol 1,2,4,6,8,10] [--jobs N] [--max-steps N] [--out DIR]"
             );
             ExitCode::SUCCESS
         }
@@ -51,6 +54,16 @@ fn main() -> ExitCode {
                 Err(e) => {
                     eprintln!("xtask accuracy: {e}");
                     ExitCode::FAILURE
+                }
+            }
+        }
+        Some("scaling") => {
+            let args: Vec<String> = std::env::args().skip(2).collect();
+            match scaling::parse(&args, &root()).and_then(|o| scaling::run(&o)) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("xtask scaling: {e}");
+                    ExitCode::from(2)
                 }
             }
         }

@@ -109,7 +109,13 @@ impl PaperColumn {
 
     /// The column's blocks, lower-left corner at the origin.
     pub fn blocks(&self) -> Vec<ConvexPolygon> {
-        let (w, h) = (10.0, 20.0);
+        self.scaled_blocks(1.0)
+    }
+
+    /// The blocks of a column `scale` times as wide and as tall, cut by the same joint
+    /// layout (about scale^2 times as many blocks of the same sizes): for scaling studies.
+    pub fn scaled_blocks(&self, scale: f64) -> Vec<ConvexPolygon> {
+        let (w, h) = (10.0 * scale, 20.0 * scale);
         let lines = place_joints(w, h, &self.layout());
         // The rectangle and the lines are fixed and valid; an error here is a bug.
         shapes::rectangle(DVec2::ZERO, DVec2::new(w, h))

@@ -1,0 +1,187 @@
+//! `cargo xtask scaling`: time per step against the number of blocks. Columns cut by the
+//! joint layout of paper 5.2b over a region `s` times as wide and as tall (about
+//! 826 s^2 blocks of the same sizes, Table 3's 5.2b parameters), run with the cover
+//! detector at r_tol 1 for a short simulated time. Writes `docs/scaling.md` and
+//! `docs/scaling.svg` (or under `--out DIR`).
+
+use dda::bench::{PAPER_COLUMNS, column_scene};
+use dda::core::{RunOptions, Simulation};
+use dda::report::plot;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Options of `cargo xtask scaling`.
+#[derive(Debug)]
+pub struct Options {
+    /// Target block counts.
+    blocks: Vec<usize>,
+    /// Simulated seconds per run.
+    duration: f64,
+    /// Where to write scaling.md and scaling.svg.
+    out: PathBuf,
+}
+
+/// Parses `--blocks 826,10000,100000 --duration 0.1 --out DIR`.
+pub fn parse(args: &[String], root: &Path) -> Result<Options, String> {
+    let mut o = Options {
+        blocks: vec![826, 3300, 10_000, 30_000, 100_000],
+        duration: 0.1,
+        out: root.join("docs"),
+    };
+    let mut it = args.iter();
+    while let Some(flag) = it.next() {
+        let value = it.next().ok_or_else(|| format!("{flag} needs a value"))?;
+        match flag.as_str() {
+            "--blocks" => {
+                o.blocks = value
+                    .split(',')
+                    .map(|v| {
+                        v.trim()
+                            .parse::<usize>()
+                            .map_err(|e| format!("--blocks {v}: {e}"))
+                    })
+                    .collect::<Result<_, _>>()?;
+            }
+            "--duration" => {
+                o.duration = value
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|d| d.is_finite() && *d > 0.0)
+                    .ok_or_else(|| format!("--duration {value}: not a positive number"))?;
+            }
+            "--out" => o.out = PathBuf::from(value),
+            other => return Err(format!("unknown option {other}")),
+        }
+    }
+    Ok(o)
+}
+
+/// One run of the study.
+struct Row {
+    blocks: usize,
+    unknowns: usize,
+    build_s: f64,
+    steps: u64,
+    oci: u64,
+    total_s: f64,
+    detection_s: f64,
+    assembly_s: f64,
+    solve_s: f64,
+    error: Option<String>,
+}
+
+/// Runs the study.
+pub fn run(o: &Options) -> Result<(), String> {
+    std::fs::create_dir_all(&o.out).map_err(|e| format!("{}: {e}", o.out.display()))?;
+    let column = PAPER_COLUMNS[3];
+    let mut rows = Vec::new();
+    for &n in &o.blocks {
+        let scale = (n as f64 / column.blocks as f64).sqrt();
+        let t0 = Instant::now();
+        let blocks = column.scaled_blocks(scale);
+        let mut analysis = column.analysis();
+        analysis.duration = o.duration;
+        analysis.frames = 0;
+        let scene = column_scene(&format!("column-{}", blocks.len()), &blocks, analysis);
+        let model = scene
+            .validate()
+            .map_err(|e| format!("{} blocks: {}: {}", blocks.len(), e.key, e.message))?;
+        let mut sim = Simulation::new(model, RunOptions::default());
+        let build_s = t0.elapsed().as_secs_f64();
+        eprintln!(
+            "scaling: {} blocks ({} unknowns), built in {build_s:.1} s",
+            blocks.len(),
+            sim.unknowns()
+        );
+        let result = sim.run(|s, _| {
+            if s.totals().steps % 20 == 0 {
+                eprintln!("  t = {:.4} s, {} steps", s.time(), s.totals().steps);
+            }
+        });
+        let t = sim.totals();
+        rows.push(Row {
+            blocks: blocks.len(),
+            unknowns: sim.unknowns(),
+            build_s,
+            steps: t.steps,
+            oci: t.oci_iterations,
+            total_s: t.total_s,
+            detection_s: t.detection_s,
+            assembly_s: t.assembly_s,
+            solve_s: t.solve_s,
+            error: result.err().map(|e| e.to_string()),
+        });
+    }
+
+    let mut doc = format!(
+        "# Time per step against the number of blocks\n\n\
+         Made by `cargo xtask scaling --blocks {} --duration {}` on this machine (2 cores).\n\
+         Columns cut by paper 5.2b's joint layout (two sets, 60 and 15 deg) over a region\n\
+         s times as wide and as tall as 10 m x 20 m, so the blocks keep their sizes and\n\
+         their number grows as s^2; Table 3's 5.2b parameters; cover detector, r_tol 1;\n\
+         {} s simulated from rest. Build: cutting, validation and set-up.\n\n\
+         | blocks | unknowns | build s | steps | OCI | wall s | ms per step | detection | assembly | solve | per step per 1k blocks (ms) |\n\
+         | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+        o.blocks
+            .iter()
+            .map(|b| b.to_string())
+            .collect::<Vec<_>>()
+            .join(","),
+        o.duration,
+        o.duration
+    );
+    for r in &rows {
+        let per = |s: f64| 1e3 * s / r.steps.max(1) as f64;
+        let _ = writeln!(
+            doc,
+            "| {} | {} | {:.1} | {} | {} | {:.2} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} |{}",
+            r.blocks,
+            r.unknowns,
+            r.build_s,
+            r.steps,
+            r.oci,
+            r.total_s,
+            per(r.total_s),
+            per(r.detection_s),
+            per(r.assembly_s),
+            per(r.solve_s),
+            per(r.total_s) / (r.blocks as f64 / 1e3),
+            r.error
+                .as_deref()
+                .map(|e| format!(" failed: {e}"))
+                .unwrap_or_default()
+        );
+    }
+    let pts = |f: fn(&Row) -> f64| -> Vec<(f64, f64)> {
+        rows.iter()
+            .filter(|r| r.steps > 0)
+            .map(|r| {
+                (
+                    (r.blocks as f64).log10(),
+                    (1e3 * f(r) / r.steps as f64).log10(),
+                )
+            })
+            .collect()
+    };
+    let series = vec![
+        ("total".to_string(), pts(|r| r.total_s)),
+        ("detection".to_string(), pts(|r| r.detection_s)),
+        ("assembly".to_string(), pts(|r| r.assembly_s)),
+        ("solve".to_string(), pts(|r| r.solve_s)),
+    ];
+    let svg = plot(
+        "Time per step against blocks (log-log; slope 1 is linear)",
+        "log10 blocks",
+        "log10 ms per step",
+        &series,
+        true,
+        true,
+    );
+    std::fs::write(o.out.join("scaling.svg"), svg).map_err(|e| format!("scaling.svg: {e}"))?;
+    doc.push_str("\n![time per step](scaling.svg)\n");
+    let path = o.out.join("scaling.md");
+    std::fs::write(&path, doc).map_err(|e| format!("{}: {e}", path.display()))?;
+    println!("wrote {}", path.display());
+    Ok(())
+}
