@@ -3,7 +3,7 @@
 //! base that bounces back. Each comes with its exact answer and a measure of a run's
 //! error against it. Rock of density 2600 kg/m^3, E = 1 GPa, nu = 0.25; g = 9.81 m/s^2.
 
-use crate::column::rock;
+use crate::column::{rock, rock_block as block};
 use dda_core::Simulation;
 use dda_core::scene::{Analysis, BlockSpec, Joint, Mode, Plane, Scene};
 use dda_geom::DVec2;
@@ -38,20 +38,6 @@ pub fn analytic_analysis(
         plane: Plane::Stress,
         max_oci: 6,
         frames: 0,
-    }
-}
-
-fn block(id: &str, vertices: Vec<[f64; 2]>, fixed: bool) -> BlockSpec {
-    BlockSpec {
-        id: id.into(),
-        material: "rock".into(),
-        vertices,
-        fixed,
-        velocity: None,
-        angular_velocity: None,
-        stress: None,
-        loads: Vec::new(),
-        fixed_points: Vec::new(),
     }
 }
 

@@ -63,17 +63,7 @@ pub fn column_scene(name: &str, blocks: &[ConvexPolygon], analysis: Analysis) ->
         });
     let reach = bb.size().y.max(bb.size().x);
     let (x0, x1, y) = (bb.min.x - reach, bb.max.x + reach, bb.min.y);
-    let spec = |id: String, vertices: Vec<[f64; 2]>, fixed: bool| BlockSpec {
-        id,
-        material: "rock".into(),
-        vertices,
-        fixed,
-        velocity: None,
-        angular_velocity: None,
-        stress: None,
-        loads: Vec::new(),
-        fixed_points: Vec::new(),
-    };
+    let spec = |id: String, vertices, fixed| rock_block(&id, vertices, fixed);
     let mut specs = vec![spec(
         "base".into(),
         vec![[x0, y - 1.0], [x1, y - 1.0], [x1, y], [x0, y]],
@@ -121,6 +111,21 @@ pub fn paper_analysis(
         plane: Plane::Stress,
         max_oci: 6,
         frames: 10,
+    }
+}
+
+/// A block of the material `rock`, at rest, without loads or fixed points.
+pub(crate) fn rock_block(id: &str, vertices: Vec<[f64; 2]>, fixed: bool) -> BlockSpec {
+    BlockSpec {
+        id: id.into(),
+        material: "rock".into(),
+        vertices,
+        fixed,
+        velocity: None,
+        angular_velocity: None,
+        stress: None,
+        loads: Vec::new(),
+        fixed_points: Vec::new(),
     }
 }
 

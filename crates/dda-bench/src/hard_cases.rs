@@ -22,7 +22,7 @@
 //!   the contact tolerance: its kinetic energy, 7.2 kg at 5 m/s, is 90 J, and a spring of
 //!   3e6 N/m takes it up over 7.7 mm < d_tol = 10 mm.
 
-use crate::column::{paper_analysis, rock};
+use crate::column::{paper_analysis, rock, rock_block};
 use dda_core::Scene;
 use dda_core::scene::{Analysis, BlockSpec, Joint};
 use std::collections::BTreeMap;
@@ -168,15 +168,8 @@ pub fn collision_scene(
     analysis: Analysis,
 ) -> Scene {
     let block = |id: &str, vertices: Vec<[f64; 2]>, fixed: bool| BlockSpec {
-        id: id.into(),
-        material: "rock".into(),
-        vertices,
-        fixed,
         velocity: (!fixed).then_some(velocity),
-        angular_velocity: None,
-        stress: None,
-        loads: Vec::new(),
-        fixed_points: Vec::new(),
+        ..rock_block(id, vertices, fixed)
     };
     Scene {
         name: name.into(),
