@@ -104,15 +104,11 @@ pub fn resolve_scene(name: Option<&str>) -> Result<Resolved, BadInput> {
             Some("toml" | "json")
         );
     if looks_like_file {
-        let scene = Scene::load(path)?.0;
-        // Scene::load has read and parsed the file; read again only to locate keys.
-        let lines = std::fs::read_to_string(path).ok().map(|text| {
-            match path.extension().and_then(|e| e.to_str()) {
-                Some("json") => LineIndex::json(&text),
-                _ => LineIndex::toml(&text),
-            }
+        let (scene, _, lines) = Scene::load_indexed(path)?;
+        return Ok(Resolved {
+            scene,
+            lines: Some(lines),
         });
-        return Ok(Resolved { scene, lines });
     }
     dda_bench::builtin(name)
         .map(|scene| Resolved { scene, lines: None })

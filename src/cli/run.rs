@@ -303,16 +303,24 @@ impl Job {
         Ok(())
     }
 
-    /// Flushes the output files to disk and saves the checkpoint atomically.
-    fn checkpoint(&mut self) -> Result<(), BadInput> {
+    /// Flushes history.csv and frames.jsonl, and with `sync` forces them to disk.
+    fn flush(&mut self, sync: bool) -> Result<(), BadInput> {
         for (w, name) in [
             (&mut self.history, "history.csv"),
             (&mut self.frames, "frames.jsonl"),
         ] {
             let path = self.work.join(name);
             w.flush().map_err(|e| io_err(e, &path))?;
-            w.get_ref().sync_data().map_err(|e| io_err(e, &path))?;
+            if sync {
+                w.get_ref().sync_data().map_err(|e| io_err(e, &path))?;
+            }
         }
+        Ok(())
+    }
+
+    /// Flushes the output files to disk and saves the checkpoint atomically.
+    fn checkpoint(&mut self) -> Result<(), BadInput> {
+        self.flush(true)?;
         let ck = Checkpoint::of(&self.sim, &self.scene, self.marks.clone())
             .map_err(|e| BadInput(format!("cannot build the checkpoint: {e}")))?;
         ck.save(&self.work.join(CHECKPOINT_FILE))
@@ -366,12 +374,7 @@ impl Job {
             self.write_frame(true)?;
             self.checkpoint()?;
         } else {
-            for (w, name) in [
-                (&mut self.history, "history.csv"),
-                (&mut self.frames, "frames.jsonl"),
-            ] {
-                w.flush().map_err(|e| io_err(e, &self.work.join(name)))?;
-            }
+            self.flush(false)?;
             if checkpoint_path.exists() {
                 std::fs::remove_file(&checkpoint_path).map_err(|e| io_err(e, &checkpoint_path))?;
             }

@@ -64,11 +64,7 @@ pub(crate) fn vertex_edge_loop(
     let tol = params.d_tol;
     let tol2 = tol * tol;
     let sin_e = params.sin_theta_e();
-    let reach = es.aabb.expanded(tol);
-    for (i, &a) in vs.vertices.iter().enumerate() {
-        if !reach.contains(a) {
-            continue;
-        }
+    for (i, a) in vs.vertices_near(es, tol) {
         let (e_prev, e_next) = vs.vertex_edges(i);
         for j in 0..es.len() {
             let b0 = es.vertices[j];

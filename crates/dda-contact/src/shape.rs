@@ -34,6 +34,22 @@ impl BlockShape {
         s
     }
 
+    /// The vertices (index, point) inside `other`'s box expanded by `tol`: the only ones
+    /// that can be within `tol` of its edges, so the vertex-edge loops start from them.
+    #[inline]
+    pub fn vertices_near<'a>(
+        &'a self,
+        other: &BlockShape,
+        tol: f64,
+    ) -> impl Iterator<Item = (usize, DVec2)> + 'a {
+        let reach = other.aabb.expanded(tol);
+        self.vertices
+            .iter()
+            .copied()
+            .enumerate()
+            .filter(move |(_, a)| reach.contains(*a))
+    }
+
     /// Refreshes the cache from `poly` (same vertex count or not), reusing the buffers.
     pub fn set(&mut self, poly: &ConvexPolygon) {
         let v = poly.vertices();

@@ -95,11 +95,7 @@ impl TerritoryDetector {
         let tol = params.d_tol;
         let tol2 = tol * tol;
         let sin_e = params.sin_theta_e();
-        let reach = es.aabb.expanded(tol);
-        for (i, &a) in vs.vertices.iter().enumerate() {
-            if !reach.contains(a) {
-                continue;
-            }
+        for (i, a) in vs.vertices_near(es, tol) {
             if with_vertex_pairs {
                 for j in 0..es.len() {
                     if self.in_vertex_territory(a, es, j, tol2) {

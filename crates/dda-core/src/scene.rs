@@ -241,6 +241,12 @@ pub enum Format {
 impl Scene {
     /// Reads and validates the scene file at `path` (format from its extension).
     pub fn load(path: &Path) -> Result<(Scene, Model), SceneError> {
+        Scene::load_indexed(path).map(|(scene, model, _)| (scene, model))
+    }
+
+    /// [`Scene::load`], also returning where the file's keys are (to name the lines of
+    /// errors and warnings found after overrides).
+    pub fn load_indexed(path: &Path) -> Result<(Scene, Model, LineIndex), SceneError> {
         let file = path.display().to_string();
         let fail = |message: String| SceneError {
             file: file.clone(),
@@ -258,11 +264,20 @@ impl Scene {
             }
         };
         let text = std::fs::read_to_string(path).map_err(|e| fail(format!("cannot read: {e}")))?;
-        Scene::parse(&text, format, &file)
+        Scene::parse_indexed(&text, format, &file)
     }
 
     /// Parses and validates scene text; `file` names it in errors.
     pub fn parse(text: &str, format: Format, file: &str) -> Result<(Scene, Model), SceneError> {
+        Scene::parse_indexed(text, format, file).map(|(scene, model, _)| (scene, model))
+    }
+
+    /// [`Scene::parse`], also returning where the text's keys are.
+    fn parse_indexed(
+        text: &str,
+        format: Format,
+        file: &str,
+    ) -> Result<(Scene, Model, LineIndex), SceneError> {
         let index = match format {
             Format::Toml => LineIndex::toml(text),
             Format::Json => LineIndex::json(text),
@@ -320,7 +335,7 @@ impl Scene {
         let model = scene
             .validate()
             .map_err(|v| error(v.key, None, v.message))?;
-        Ok((scene, model))
+        Ok((scene, model, index))
     }
 
     /// Multiplies the contact tolerance and the largest step displacement by `r`
