@@ -16,23 +16,33 @@ pub struct DetectionParams {
     /// Contact tolerance d_tol (the paper's d_n^tol), m: radius of an edge's contact region.
     pub d_tol: f64,
     /// Entrance angle tolerance theta_e (the paper's theta_e^tol), radians.
-    pub theta_e: f64,
+    theta_e: f64,
+    /// sin(theta_e), computed once: the filters use it for every vertex-edge pair.
+    sin_theta_e: f64,
 }
 
 impl DetectionParams {
     /// Tolerances for a step limited to rotation `theta_max`: theta_e = 2 theta_max
     /// (paper section 2.6).
     pub fn new(d_tol: f64, theta_max: f64) -> Self {
+        let theta_e = 2.0 * theta_max;
         DetectionParams {
             d_tol,
-            theta_e: 2.0 * theta_max,
+            theta_e,
+            sin_theta_e: theta_e.sin(),
         }
+    }
+
+    /// The entrance angle tolerance theta_e, radians.
+    #[inline]
+    pub fn theta_e(&self) -> f64 {
+        self.theta_e
     }
 
     /// sin(theta_e), the bound of the entrance filter (paper eq. 5-6).
     #[inline]
     pub fn sin_theta_e(&self) -> f64 {
-        self.theta_e.sin()
+        self.sin_theta_e
     }
 }
 
@@ -115,6 +125,11 @@ fn detect_range(
     list: &mut Vec<Contact>,
     ranges: &mut Vec<PairContacts>,
 ) {
+    // Both pair lists are sorted: walk the previous one with a cursor.
+    let mut prev_k = match pairs.first() {
+        Some(first) => previous.pairs.partition_point(|p| p.pair < *first),
+        None => 0,
+    };
     for &pair in pairs {
         let start = list.len();
         detector.detect_pair(
@@ -124,7 +139,13 @@ fn detect_range(
             params,
             list,
         );
-        let before = previous.with_pair(pair);
+        while prev_k < previous.pairs.len() && previous.pairs[prev_k].pair < pair {
+            prev_k += 1;
+        }
+        let before = match previous.pairs.get(prev_k) {
+            Some(p) if p.pair == pair => previous.of_pair(prev_k),
+            _ => &[],
+        };
         if detector.keeps_closed_contacts() {
             keep_closed(shapes, before, start, list);
         }
@@ -204,9 +225,7 @@ pub fn detect(
     #[cfg(feature = "rayon")]
     if parallel && pairs.len() >= 256 {
         use rayon::prelude::*;
-        let chunk = pairs
-            .len()
-            .div_ceil(4 * rayon::current_num_threads().max(1));
+        let chunk = pairs.len().div_ceil(rayon::current_num_threads().max(1));
         let parts: Vec<(Vec<Contact>, Vec<PairContacts>)> = pairs
             .par_chunks(chunk)
             .map(|ps| {

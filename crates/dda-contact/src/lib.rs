@@ -27,6 +27,6 @@ pub use self::detector::{
     ContactDetector, DETECTOR_NAMES, DetectionParams, UnknownDetector, detect, detector_by_name,
     track,
 };
-pub use self::neighbour::{NeighbourPair, neighbour_pairs};
+pub use self::neighbour::{NeighbourPair, NeighbourSearch, neighbour_pairs};
 pub use self::shape::BlockShape;
 pub use self::territory::{Territory, TerritoryDetector};

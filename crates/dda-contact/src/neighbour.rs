@@ -27,44 +27,140 @@ impl NeighbourPair {
 
 /// All pairs of boxes no farther apart than `gap` (each box is grown by gap / 2), sorted.
 /// Sort-and-sweep along the longer axis of the scene: O(N log N + K) for K pairs.
-/// `out` is cleared first, so its buffer can be reused from step to step.
+/// `out` is cleared first, so its buffer can be reused from step to step; a
+/// [`NeighbourSearch`] also keeps its sort order and scratch from call to call.
 pub fn neighbour_pairs(boxes: &[Aabb], gap: f64, out: &mut Vec<NeighbourPair>) {
-    out.clear();
-    if boxes.len() < 2 {
-        return;
+    NeighbourSearch::default().find(boxes, gap, out);
+}
+
+/// Sort-and-sweep neighbour search that keeps its box order and buffers between calls:
+/// blocks move little in a step, so the order of the last call is nearly sorted and
+/// re-sorts in about linear time (the stable sort finds the runs), and nothing is
+/// allocated once the buffers have grown. Gives exactly [`neighbour_pairs`]' result.
+#[derive(Clone, Debug, Default)]
+pub struct NeighbourSearch {
+    /// Box indices in the order of the last sweep.
+    order: Vec<u32>,
+    /// Pairs found by the sweep, then per lower block the start of its pairs.
+    found: Vec<NeighbourPair>,
+    start: Vec<u32>,
+}
+
+impl NeighbourSearch {
+    /// An empty search.
+    pub fn new() -> Self {
+        Self::default()
     }
-    let half = 0.5 * gap.max(0.0);
-    let scene = boxes.iter().skip(1).fold(boxes[0], |s, b| s.union(b));
-    let size = scene.size();
-    let axis = usize::from(size.y > size.x);
-    let lo = |b: &Aabb| if axis == 0 { b.min.x } else { b.min.y } - half;
-    let hi = |b: &Aabb| if axis == 0 { b.max.x } else { b.max.y } + half;
-    let mut order: Vec<u32> = (0..boxes.len() as u32).collect();
-    order.sort_unstable_by(|&i, &j| {
-        lo(&boxes[i as usize])
-            .total_cmp(&lo(&boxes[j as usize]))
-            .then(i.cmp(&j))
-    });
-    for (k, &i) in order.iter().enumerate() {
-        let bi = boxes[i as usize].expanded(half);
-        let end = hi(&boxes[i as usize]);
-        for &j in &order[k + 1..] {
-            let bj = &boxes[j as usize];
-            if lo(bj) > end {
-                break;
-            }
-            if bi.overlaps(&bj.expanded(half)) {
-                out.push(NeighbourPair::new(i, j));
+
+    /// All pairs of `boxes` no farther apart than `gap`, sorted, into `out` (cleared).
+    pub fn find(&mut self, boxes: &[Aabb], gap: f64, out: &mut Vec<NeighbourPair>) {
+        out.clear();
+        if boxes.len() < 2 {
+            return;
+        }
+        let half = 0.5 * gap.max(0.0);
+        let scene = boxes.iter().skip(1).fold(boxes[0], |s, b| s.union(b));
+        let size = scene.size();
+        let axis = usize::from(size.y > size.x);
+        let lo = |b: &Aabb| if axis == 0 { b.min.x } else { b.min.y } - half;
+        let hi = |b: &Aabb| if axis == 0 { b.max.x } else { b.max.y } + half;
+        let n = boxes.len();
+        if self.order.len() != n {
+            self.order.clear();
+            self.order.extend(0..n as u32);
+        }
+        // Ties broken by index: the order is a total one, whatever the previous order.
+        self.order.sort_by(|&i, &j| {
+            lo(&boxes[i as usize])
+                .total_cmp(&lo(&boxes[j as usize]))
+                .then(i.cmp(&j))
+        });
+        self.found.clear();
+        for (k, &i) in self.order.iter().enumerate() {
+            let bi = boxes[i as usize].expanded(half);
+            let end = hi(&boxes[i as usize]);
+            for &j in &self.order[k + 1..] {
+                let bj = &boxes[j as usize];
+                if lo(bj) > end {
+                    break;
+                }
+                if bi.overlaps(&bj.expanded(half)) {
+                    self.found.push(NeighbourPair::new(i, j));
+                }
             }
         }
+        // Counting sort by the lower block, then each block's few pairs by the higher.
+        self.start.clear();
+        self.start.resize(n + 1, 0);
+        for p in &self.found {
+            self.start[p.a as usize + 1] += 1;
+        }
+        for a in 0..n {
+            self.start[a + 1] += self.start[a];
+        }
+        out.resize(self.found.len(), NeighbourPair { a: 0, b: 0 });
+        for p in &self.found {
+            let slot = &mut self.start[p.a as usize];
+            out[*slot as usize] = *p;
+            *slot += 1;
+        }
+        // `start[a]` is now the end of block a's pairs, the start of block a + 1's.
+        let mut begin = 0;
+        for a in 0..n {
+            let end = self.start[a] as usize;
+            out[begin..end].sort_unstable();
+            begin = end;
+        }
     }
-    out.sort_unstable();
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use dda_geom::DVec2;
+
+    /// The search that keeps its order gives the plain search's pairs as boxes move.
+    #[test]
+    fn kept_order_matches_a_fresh_search() {
+        let mut rng = 12345u64;
+        let mut next = || {
+            rng = rng
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (rng >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut boxes: Vec<Aabb> = (0..300)
+            .map(|_| {
+                let c = DVec2::new(10.0 * next(), 4.0 * next());
+                let h = DVec2::new(0.05 + 0.3 * next(), 0.05 + 0.3 * next());
+                Aabb {
+                    min: c - h,
+                    max: c + h,
+                }
+            })
+            .collect();
+        let mut search = NeighbourSearch::new();
+        let (mut kept, mut fresh) = (Vec::new(), Vec::new());
+        for _ in 0..20 {
+            search.find(&boxes, 0.02, &mut kept);
+            // The reference: every pair checked, no sweep.
+            fresh.clear();
+            for i in 0..boxes.len() {
+                for j in i + 1..boxes.len() {
+                    if boxes[i].expanded(0.01).overlaps(&boxes[j].expanded(0.01)) {
+                        fresh.push(NeighbourPair::new(i as u32, j as u32));
+                    }
+                }
+            }
+            assert_eq!(kept, fresh);
+            assert!(!kept.is_empty());
+            for b in boxes.iter_mut() {
+                let d = DVec2::new(0.2 * next() - 0.1, 0.2 * next() - 0.1);
+                b.min += d;
+                b.max += d;
+            }
+        }
+    }
 
     #[test]
     fn touching_and_gap() {

@@ -34,9 +34,11 @@ use crate::springs::{Row, contact_length, contact_points, normal_row, shear_row}
 use crate::system::{BlockSystem, Entry, RankOne, SolveError};
 use dda_contact::{
     BlockShape, ContactDetector, ContactSet, ContactState, DetectionParams, NeighbourPair,
-    detector_by_name, neighbour_pairs,
+    NeighbourSearch, detector_by_name,
 };
-use dda_geom::{Aabb, ConvexPolygon, DVec2, Motion, VertexEdge, displace_point};
+use dda_geom::{
+    Aabb, ConvexPolygon, DVec2, Motion, VertexEdge, check_displacement, displace_point, separation,
+};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
@@ -241,8 +243,13 @@ pub struct RunOptions {
 }
 
 impl Default for RunOptions {
+    /// Sequential. Measured on this project's 2-core machine, the thread pool did not pay
+    /// for step-start detection at any size tried: paper 5.2b (826 blocks), detection
+    /// 0.72-0.77 s with threads against 0.60 s without over the run; 10,131 blocks,
+    /// 17.7 against 16.8 ms per step. Most of the detection time is tracking in the
+    /// open-close iteration and the neighbour search, which are sequential.
     fn default() -> Self {
-        RunOptions { parallel: true }
+        RunOptions { parallel: false }
     }
 }
 
@@ -256,6 +263,15 @@ const DT_FLOOR: f64 = 1e-9;
 /// Over whole runs the solve time per OCI iteration was 1.83 ms at 16, 1.85 at 24, 1.80
 /// at 40 and 2.02 at 64: flat from 16 to 40.
 const MAX_RANK: usize = 24;
+
+/// How near (in d_tol, by separating-axis gap) two free blocks must be for a new matrix
+/// pattern to couple them before they have contacts. Measured on paper 5.2b (826 blocks,
+/// one run each): coupling every pair whose boxes are within d_tol gave 58 symbolic
+/// analyses and 530-580k nonzeros in L, 3.2 ms per factorisation; coupling only the
+/// needed pairs, 340 analyses and 335k nonzeros (2.3 ms), but each analysis costs the
+/// next step its predicted states; margins of 2, 3, 4 and 6 d_tol gave 34, 21, 14 and
+/// 9 analyses with 374k, 384k, 408k and 443k nonzeros (2.71, 2.76, 2.82 and 2.80 ms).
+const PATTERN_MARGIN: f64 = 2.0;
 
 /// A spring in effect in an OCI iteration: its contact, whether it is the shear spring
 /// (else the normal one), its penalty, where it couples in the system, and its row.
@@ -289,7 +305,12 @@ pub struct Simulation {
     // Work buffers, reused from step to step.
     system: BlockSystem,
     prev: ContactSet,
+    neighbours: NeighbourSearch,
     pairs: Vec<NeighbourPair>,
+    /// The contacts at step start, restored when an attempt is cut.
+    saved: Vec<dda_contact::Contact>,
+    /// Neighbour pairs within the pattern margin (only when a new pattern is made).
+    pattern_pairs: Vec<NeighbourPair>,
     aabbs: Vec<Aabb>,
     block_pairs: Vec<(u32, u32)>,
     /// The system's pattern: the needed pairs when it was last set, widened.
@@ -382,7 +403,10 @@ impl Simulation {
             contacts: ContactSet::default(),
             system: BlockSystem::new(),
             prev: ContactSet::default(),
+            neighbours: NeighbourSearch::new(),
             pairs: Vec::new(),
+            saved: Vec::new(),
+            pattern_pairs: Vec::new(),
             aabbs: Vec::with_capacity(n),
             block_pairs: Vec::new(),
             pattern: Vec::new(),
@@ -629,9 +653,11 @@ impl Simulation {
         for c in &self.contacts.contacts {
             self.rows.push(normal_row(c, &self.shapes));
         }
-        let saved = self.contacts.contacts.clone();
-        let p = self.model.params.clone();
-        let remaining = p.duration - self.t;
+        self.saved.clone_from(&self.contacts.contacts);
+        let p = &self.model.params;
+        let (duration, d_max, theta_max, max_oci, dt0) =
+            (p.duration, p.d_max, p.theta_max, p.max_oci, p.dt0);
+        let remaining = duration - self.t;
         // Land on `duration`; a remainder within 1e-6 of a step is taken with it rather
         // than left as a sliver step.
         let landing = self.dt * (1.0 + 1e-6) >= remaining;
@@ -655,21 +681,21 @@ impl Simulation {
             if converged {
                 let (disp, rot, moved_most) = self.largest_motion();
                 *worst = moved_most;
-                if disp <= p.d_max && rot <= p.theta_max {
+                if disp <= d_max && rot <= theta_max {
                     rec.oci = iterations;
-                    let easy = iterations <= p.max_oci.div_ceil(2) && disp <= 0.5 * p.d_max;
+                    let easy = iterations <= max_oci.div_ceil(2) && disp <= 0.5 * d_max;
                     self.accept(dt, &mut rec)?;
                     if landing {
-                        self.t = p.duration;
+                        self.t = duration;
                     } else {
                         self.dt = dt;
                         if easy {
-                            self.dt = (dt * 1.25).min(p.dt0);
+                            self.dt = (dt * 1.25).min(dt0);
                         }
                     }
                     break;
                 }
-                let ratio = (p.d_max / disp).min(p.theta_max / rot.max(f64::MIN_POSITIVE));
+                let ratio = (d_max / disp).min(theta_max / rot.max(f64::MIN_POSITIVE));
                 dt *= (0.9 * ratio).clamp(0.1, 0.9);
                 reason = "step displacement above d_max or rotation above theta_max";
             } else {
@@ -678,8 +704,8 @@ impl Simulation {
             }
             rec.cuts += 1;
             self.totals.cuts += 1;
-            self.contacts.contacts.copy_from_slice(&saved);
-            if dt < DT_FLOOR * p.dt0 {
+            self.contacts.contacts.copy_from_slice(&self.saved);
+            if dt < DT_FLOOR * dt0 {
                 return Err(SimError::TimeStepCollapsed {
                     t: self.t,
                     dt,
@@ -707,7 +733,8 @@ impl Simulation {
     fn detect_step_start(&mut self) {
         self.aabbs.clear();
         self.aabbs.extend(self.shapes.iter().map(|s| s.aabb));
-        neighbour_pairs(&self.aabbs, self.detection.d_tol, &mut self.pairs);
+        self.neighbours
+            .find(&self.aabbs, self.detection.d_tol, &mut self.pairs);
         let free = &self.free;
         self.pairs
             .retain(|p| free[p.a as usize].is_some() || free[p.b as usize].is_some());
@@ -749,14 +776,19 @@ impl Simulation {
         self.block_pairs.sort_unstable();
         self.block_pairs.dedup();
         if !is_subset(&self.block_pairs, &self.pattern) {
-            // A new pattern: every free neighbour pair (boxes within d_tol), contacts or
-            // not, so that it holds while blocks shift among their neighbours. It is kept
-            // until a needed pair is missing: measured on paper 5.2b, symbolic analyses
-            // fell from 778 to 58 in ~1,050 steps. Wider margins (2-8 d_tol) cut them
-            // further but the extra fill cost more per factorisation than they saved.
+            // A new pattern: the needed pairs and every free pair whose polygons are
+            // within PATTERN_MARGIN d_tol (separating-axis gap), contacts or not, so that
+            // it holds while blocks shift among their neighbours. It is kept until a
+            // needed pair is missing.
             self.pattern.clone_from(&self.block_pairs);
-            for q in &self.pairs {
-                if let (Some(a), Some(b)) = (self.free[q.a as usize], self.free[q.b as usize]) {
+            let margin = PATTERN_MARGIN * self.detection.d_tol;
+            self.neighbours
+                .find(&self.aabbs, margin, &mut self.pattern_pairs);
+            for q in &self.pattern_pairs {
+                let (pa, pb) = (&self.blocks[q.a as usize], &self.blocks[q.b as usize]);
+                if let (Some(a), Some(b)) = (self.free[q.a as usize], self.free[q.b as usize])
+                    && separation(&pa.polygon, &pb.polygon).0 < margin
+                {
                     self.pattern.push((a.min(b), a.max(b)));
                 }
             }
@@ -1305,24 +1337,16 @@ impl Simulation {
         }
         rec.max_penetration = max_pen;
         rec.dt = dt;
-        // Move every block first, so that a failure leaves the state untouched.
-        let mut moved = Vec::with_capacity(self.n_free);
-        for (i, b) in self.blocks.iter().enumerate() {
-            if self.free[i].is_none() {
-                continue;
-            }
-            let c = self.shapes[i].centroid;
-            let poly = b
-                .polygon
-                .displaced(c, &self.d[i])
-                .map_err(|_| SimError::Inverted {
+        // Check every block's motion first, so that a failure leaves the state untouched.
+        for i in 0..self.blocks.len() {
+            if self.free[i].is_some() && check_displacement(&self.d[i]).is_err() {
+                return Err(SimError::Inverted {
                     t: self.t,
                     block: self.model.blocks[i].id.clone(),
-                })?;
-            moved.push(poly);
+                });
+            }
         }
         let dynamic = self.model.params.mode == Mode::Dynamic;
-        let mut moved = moved.into_iter();
         for i in 0..self.blocks.len() {
             if self.free[i].is_none() {
                 continue;
@@ -1330,9 +1354,11 @@ impl Simulation {
             let d = self.d[i];
             let c = self.shapes[i].centroid;
             let b = &mut self.blocks[i];
-            if let Some(poly) = moved.next() {
-                b.polygon = poly;
-            }
+            // Cannot fail: every motion was checked above.
+            b.polygon.displace(c, &d).map_err(|_| SimError::Inverted {
+                t: self.t,
+                block: self.model.blocks[i].id.clone(),
+            })?;
             for v in 0..6 {
                 b.velocity[v] = if dynamic {
                     2.0 * d[v] / dt - b.velocity[v]

@@ -28,8 +28,8 @@ pub use self::measures::{
     outward_normal, projection_ratio,
 };
 pub use self::polygon::{
-    ConvexPolygon, DEFAULT_REL_TOL, Moments, Motion, PolygonOptions, Repairs, displace_point,
-    separation,
+    ConvexPolygon, DEFAULT_REL_TOL, Moments, Motion, PolygonOptions, Repairs, check_displacement,
+    displace_point, separation,
 };
 
 /// 2D vector type used throughout (glam's `DVec2`, f64).

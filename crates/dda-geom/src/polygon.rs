@@ -453,18 +453,32 @@ impl ConvexPolygon {
     /// (its centroid) is `center`, with unknowns `d = (u0, v0, r0, ex, ey, gxy)`
     /// (DESIGN section 3). The rotation r0 is applied exactly; the strains linearly.
     pub fn displaced(&self, center: DVec2, d: &[f64; 6]) -> Result<Self, PolygonError> {
-        let m = displacement_matrix(d);
-        if m[0] * m[3] - m[1] * m[2] <= 0.0 {
-            return Err(PolygonError::Inverted);
-        }
-        let t = DVec2::new(d[0], d[1]);
-        let moved = self
-            .vertices
-            .iter()
-            .map(|&p| apply(&m, center, t, p))
-            .collect();
-        Ok(Self::from_valid(moved))
+        let mut moved = self.clone();
+        moved.displace(center, d)?;
+        Ok(moved)
     }
+
+    /// [`ConvexPolygon::displaced`] in place, without allocating; on error (the motion
+    /// would turn the polygon inside out, see [`check_displacement`]) it is unchanged.
+    pub fn displace(&mut self, center: DVec2, d: &[f64; 6]) -> Result<(), PolygonError> {
+        check_displacement(d)?;
+        let m = displacement_matrix(d);
+        let t = DVec2::new(d[0], d[1]);
+        for p in self.vertices.iter_mut() {
+            *p = apply(&m, center, t, *p);
+        }
+        Ok(())
+    }
+}
+
+/// Whether the DDA displacement `d` keeps a polygon's orientation (its linear part has a
+/// positive determinant): [`ConvexPolygon::displace`] fails exactly when this does.
+pub fn check_displacement(d: &[f64; 6]) -> Result<(), PolygonError> {
+    let m = displacement_matrix(d);
+    if m[0] * m[3] - m[1] * m[2] <= 0.0 {
+        return Err(PolygonError::Inverted);
+    }
+    Ok(())
 }
 
 /// Linear part [m00, m01, m10, m11] of the block motion: exact rotation plus strain.
