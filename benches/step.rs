@@ -5,6 +5,8 @@
 //!   next step, including its open-close iterations and any time-step cuts); the mean
 //!   per-phase seconds of the measured steps are printed after it.
 //! - `column_step/detect`: step-start detection over every neighbour pair (cover).
+//! - `column_step/assemble`: adding block terms and spring outer products into the
+//!   block-sparse storage of the global matrix on the column's own block pattern, no solve.
 //! - `column_step/factorise_solve`: numeric Cholesky + solve of the global matrix on the
 //!   column's own block pattern (6 DOF per block), the symbolic analysis done once.
 //! - `column_step/low_rank_solve/k`: a solve through a rank-k update of that factor.
@@ -95,26 +97,42 @@ fn bench_step(c: &mut Criterion) {
         .map(|q| (q.a - 1, q.b - 1))
         .collect();
     let nb = shapes.len() - 1;
-    let build = || {
-        let mut sys = BlockSystem::new();
-        sys.set_pattern(nb, 6, &block_pairs).expect("pattern");
+    let diag = {
         let mut diag = [[0.0; 6]; 6];
         for (k, row) in diag.iter_mut().enumerate() {
             row[k] = 1e9;
         }
+        diag
+    };
+    let u: Vec6 = [1.0, -1.0, 0.3, 0.1, 0.2, -0.1];
+    // The values of a column-like matrix: a block term per block, and per coupled pair
+    // one spring's outer products (two diagonal, one off-diagonal).
+    let assemble = |sys: &mut BlockSystem| {
+        sys.clear();
         for i in 0..nb as u32 {
             sys.add_diagonal(i, &diag);
             sys.add_rhs(i, 1.0, &[1.0; 6]);
         }
-        let u: Vec6 = [1.0, -1.0, 0.3, 0.1, 0.2, -0.1];
         for &(i, j) in &block_pairs {
             let e = sys.entry(i, j).expect("entry");
             sys.add_outer(sys.diagonal(i), i, i, 3e8, &u, &u);
             sys.add_outer(sys.diagonal(j), j, j, 3e8, &u, &u);
             sys.add_outer(e, i, j, -3e8, &u, &u);
         }
+    };
+    let build = || {
+        let mut sys = BlockSystem::new();
+        sys.set_pattern(nb, 6, &block_pairs).expect("pattern");
+        assemble(&mut sys);
         sys
     };
+    let mut sys = build();
+    group.bench_function("assemble", |b| {
+        b.iter(|| {
+            assemble(&mut sys);
+            black_box(sys.is_factored())
+        })
+    });
     group.bench_function("factorise_solve", |b| {
         b.iter_batched_ref(
             build,

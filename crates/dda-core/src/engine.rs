@@ -244,14 +244,20 @@ pub struct RunOptions {
 
 impl Default for RunOptions {
     /// Sequential. Measured on this project's 2-core machine, the thread pool did not pay
-    /// for step-start detection at any size tried: paper 5.2b (826 blocks), detection
-    /// 0.72-0.77 s with threads against 0.60 s without over the run; 10,131 blocks,
-    /// 17.7 against 16.8 ms per step. Most of the detection time is tracking in the
-    /// open-close iteration and the neighbour search, which are sequential.
+    /// at any size tried: paper 5.2b (826 blocks), detection 0.72-0.80 s with threads
+    /// against 0.60-0.64 s without over the run, per-block terms in assembly 1.19-1.29 s
+    /// against 1.12-1.17 s; 10,131 blocks, detection 17.7 against 16.8 ms per step. Most
+    /// of the detection time is tracking in the open-close iteration and the neighbour
+    /// search, which are sequential, and the parallel parts are too short per step to
+    /// pay for waking the pool.
     fn default() -> Self {
         RunOptions { parallel: false }
     }
 }
+
+/// Fewest free blocks for which per-block terms are computed on the thread pool (when
+/// [`RunOptions::parallel`] is on): below it, waking the pool costs more than it saves.
+const PARALLEL_MIN_BLOCKS: usize = 256;
 
 /// Floor of the time step, relative to the initial step: below it the run stops.
 const DT_FLOOR: f64 = 1e-9;
@@ -297,6 +303,8 @@ pub struct Simulation {
     shapes: Vec<BlockShape>,
     /// Free-block index of each block (None: fixed).
     free: Vec<Option<u32>>,
+    /// Block index of each free block: the inverse of `free`.
+    free_blocks: Vec<u32>,
     n_free: usize,
     t: f64,
     dt: f64,
@@ -396,6 +404,9 @@ impl Simulation {
             options,
             blocks,
             shapes,
+            free_blocks: (0..free.len() as u32)
+                .filter(|&i| free[i as usize].is_some())
+                .collect(),
             free,
             n_free: n_free as usize,
             t: 0.0,
@@ -809,76 +820,35 @@ impl Simulation {
         Ok(())
     }
 
-    /// Per-block terms that do not depend on contacts: elasticity and stress, inertia,
-    /// gravity, point loads, fixed points (each only if its effect is on).
+    /// Per-block terms that do not depend on contacts (see [`block_terms`]), one per free
+    /// block in free-block order. With `parallel` they are computed on the thread pool:
+    /// each block's terms depend on that block alone, so the result is the same.
     fn base_terms(&mut self, dt: f64) {
-        let nb = self.blocks.len();
-        let eff = self.effects;
-        let p = &self.model.params;
-        self.base_k.clear();
-        self.base_f.clear();
-        self.mass.clear();
-        for i in 0..nb {
-            if self.free[i].is_none() {
-                continue;
-            }
-            let b = &self.blocks[i];
-            let m = b.polygon.moments();
-            let mat = self.model.materials[self.model.blocks[i].material];
-            let mass = mass_matrix(&m, mat.density);
-            let mut k = [[0.0; 6]; 6];
-            let mut f = [0.0; 6];
-            // Inertia (constant acceleration): 2/dt^2 M, and 2/dt M V when dynamic.
-            let c2 = 2.0 / (dt * dt);
-            for a in 0..6 {
-                for bb in 0..6 {
-                    k[a][bb] += c2 * mass[a][bb];
-                }
-            }
-            if eff.inertia {
-                let c1 = 2.0 / dt;
-                for a in 0..6 {
-                    f[a] += c1 * (0..6).map(|bb| mass[a][bb] * b.velocity[bb]).sum::<f64>();
-                }
-            }
-            if eff.elasticity {
-                let e = elasticity(mat.young, mat.poisson);
-                for a in 0..3 {
-                    for bb in 0..3 {
-                        k[3 + a][3 + bb] += m.area * e[a][bb];
-                    }
-                    f[3 + a] -= m.area * b.stress[a];
-                }
-            }
-            if eff.gravity
-                && let Some(g) = p.gravity
-            {
-                f[0] += mat.density * g.x * m.area;
-                f[1] += mat.density * g.y * m.area;
-            }
-            for &(at, force) in &b.loads {
-                let r = along(force, at, m.centroid);
-                for a in 0..6 {
-                    f[a] += r[a];
-                }
-            }
-            for &(now, place) in &b.fixed_points {
-                // Two rows (x and y) of a spring pulling the point to its place.
-                for dir in [DVec2::X, DVec2::Y] {
-                    let r = along(dir, now, m.centroid);
-                    let g0 = (now - place).dot(dir);
-                    for a in 0..6 {
-                        f[a] -= p.fixed_penalty * g0 * r[a];
-                        for bb in 0..6 {
-                            k[a][bb] += p.fixed_penalty * r[a] * r[bb];
-                        }
-                    }
-                }
-            }
-            self.base_k.push(k);
-            self.base_f.push(f);
-            self.mass.push(mass);
+        let n = self.free_blocks.len();
+        self.base_k.resize(n, [[0.0; 6]; 6]);
+        self.base_f.resize(n, [0.0; 6]);
+        self.mass.resize(n, [[0.0; 6]; 6]);
+        let (model, blocks, eff) = (&self.model, &self.blocks, self.effects);
+        let terms = |(((k, f), mass), &i): (((&mut Mat6, &mut Vec6), &mut Mat6), &u32)| {
+            (*k, *f, *mass) = block_terms(model, eff, &blocks[i as usize], i as usize, dt);
+        };
+        #[cfg(feature = "rayon")]
+        if self.options.parallel && n >= PARALLEL_MIN_BLOCKS {
+            use rayon::prelude::*;
+            self.base_k
+                .par_iter_mut()
+                .zip(self.base_f.par_iter_mut())
+                .zip(self.mass.par_iter_mut())
+                .zip(self.free_blocks.par_iter())
+                .for_each(terms);
+            return;
         }
+        self.base_k
+            .iter_mut()
+            .zip(self.base_f.iter_mut())
+            .zip(self.mass.iter_mut())
+            .zip(self.free_blocks.iter())
+            .for_each(terms);
     }
 
     /// The joint of a contact.
@@ -1476,6 +1446,73 @@ impl Simulation {
 }
 
 /// Whether sorted `a` is contained in sorted `b`.
+/// A free block's terms that do not depend on contacts, at step size `dt`: its stiffness
+/// (inertia 2/dt^2 M, elasticity, fixed-point springs), right-hand side (inertia 2/dt M V,
+/// initial stress, gravity, point loads, fixed points) and mass matrix M (each only if
+/// its effect is on).
+fn block_terms(
+    model: &Model,
+    eff: Effects,
+    b: &BlockState,
+    i: usize,
+    dt: f64,
+) -> (Mat6, Vec6, Mat6) {
+    let p = &model.params;
+    let m = b.polygon.moments();
+    let mat = model.materials[model.blocks[i].material];
+    let mass = mass_matrix(&m, mat.density);
+    let mut k = [[0.0; 6]; 6];
+    let mut f = [0.0; 6];
+    // Inertia (constant acceleration): 2/dt^2 M, and 2/dt M V when dynamic.
+    let c2 = 2.0 / (dt * dt);
+    for a in 0..6 {
+        for bb in 0..6 {
+            k[a][bb] += c2 * mass[a][bb];
+        }
+    }
+    if eff.inertia {
+        let c1 = 2.0 / dt;
+        for a in 0..6 {
+            f[a] += c1 * (0..6).map(|bb| mass[a][bb] * b.velocity[bb]).sum::<f64>();
+        }
+    }
+    if eff.elasticity {
+        let e = elasticity(mat.young, mat.poisson);
+        for a in 0..3 {
+            for bb in 0..3 {
+                k[3 + a][3 + bb] += m.area * e[a][bb];
+            }
+            f[3 + a] -= m.area * b.stress[a];
+        }
+    }
+    if eff.gravity
+        && let Some(g) = p.gravity
+    {
+        f[0] += mat.density * g.x * m.area;
+        f[1] += mat.density * g.y * m.area;
+    }
+    for &(at, force) in &b.loads {
+        let r = along(force, at, m.centroid);
+        for a in 0..6 {
+            f[a] += r[a];
+        }
+    }
+    for &(now, place) in &b.fixed_points {
+        // Two rows (x and y) of a spring pulling the point to its place.
+        for dir in [DVec2::X, DVec2::Y] {
+            let r = along(dir, now, m.centroid);
+            let g0 = (now - place).dot(dir);
+            for a in 0..6 {
+                f[a] -= p.fixed_penalty * g0 * r[a];
+                for bb in 0..6 {
+                    k[a][bb] += p.fixed_penalty * r[a] * r[bb];
+                }
+            }
+        }
+    }
+    (k, f, mass)
+}
+
 fn is_subset(a: &[(u32, u32)], b: &[(u32, u32)]) -> bool {
     let mut j = 0;
     for x in a {
