@@ -1308,15 +1308,17 @@ impl Simulation {
         rec.max_penetration = max_pen;
         rec.dt = dt;
         // Check every block's motion first, so that a failure leaves the state untouched.
+        let (t, model) = (self.t, &self.model);
+        let inverted = |i: usize| SimError::Inverted {
+            t,
+            block: model.blocks[i].id.clone(),
+        };
         for i in 0..self.blocks.len() {
             if self.free[i].is_some() && check_displacement(&self.d[i]).is_err() {
-                return Err(SimError::Inverted {
-                    t: self.t,
-                    block: self.model.blocks[i].id.clone(),
-                });
+                return Err(inverted(i));
             }
         }
-        let dynamic = self.model.params.mode == Mode::Dynamic;
+        let dynamic = model.params.mode == Mode::Dynamic;
         for i in 0..self.blocks.len() {
             if self.free[i].is_none() {
                 continue;
@@ -1325,10 +1327,7 @@ impl Simulation {
             let c = self.shapes[i].centroid;
             let b = &mut self.blocks[i];
             // Cannot fail: every motion was checked above.
-            b.polygon.displace(c, &d).map_err(|_| SimError::Inverted {
-                t: self.t,
-                block: self.model.blocks[i].id.clone(),
-            })?;
+            b.polygon.displace(c, &d).map_err(|_| inverted(i))?;
             for v in 0..6 {
                 b.velocity[v] = if dynamic {
                     2.0 * d[v] / dt - b.velocity[v]
@@ -1445,7 +1444,6 @@ impl Simulation {
     }
 }
 
-/// Whether sorted `a` is contained in sorted `b`.
 /// A free block's terms that do not depend on contacts, at step size `dt`: its stiffness
 /// (inertia 2/dt^2 M, elasticity, fixed-point springs), right-hand side (inertia 2/dt M V,
 /// initial stress, gravity, point loads, fixed points) and mass matrix M (each only if
@@ -1513,6 +1511,7 @@ fn block_terms(
     (k, f, mass)
 }
 
+/// Whether sorted `a` is contained in sorted `b`.
 fn is_subset(a: &[(u32, u32)], b: &[(u32, u32)]) -> bool {
     let mut j = 0;
     for x in a {

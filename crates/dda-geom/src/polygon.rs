@@ -461,8 +461,8 @@ impl ConvexPolygon {
     /// [`ConvexPolygon::displaced`] in place, without allocating; on error (the motion
     /// would turn the polygon inside out, see [`check_displacement`]) it is unchanged.
     pub fn displace(&mut self, center: DVec2, d: &[f64; 6]) -> Result<(), PolygonError> {
-        check_displacement(d)?;
         let m = displacement_matrix(d);
+        keeps_orientation(&m)?;
         let t = DVec2::new(d[0], d[1]);
         for p in self.vertices.iter_mut() {
             *p = apply(&m, center, t, *p);
@@ -474,7 +474,12 @@ impl ConvexPolygon {
 /// Whether the DDA displacement `d` keeps a polygon's orientation (its linear part has a
 /// positive determinant): [`ConvexPolygon::displace`] fails exactly when this does.
 pub fn check_displacement(d: &[f64; 6]) -> Result<(), PolygonError> {
-    let m = displacement_matrix(d);
+    keeps_orientation(&displacement_matrix(d))
+}
+
+/// Whether the linear part `m` of a motion has a positive determinant.
+#[inline]
+fn keeps_orientation(m: &[f64; 4]) -> Result<(), PolygonError> {
     if m[0] * m[3] - m[1] * m[2] <= 0.0 {
         return Err(PolygonError::Inverted);
     }
