@@ -264,11 +264,13 @@ const DT_FLOOR: f64 = 1e-9;
 
 /// Most springs that may differ from the factorised matrix before an OCI iteration
 /// assembles and factorises anew rather than solving through a low-rank update. Measured
-/// on paper 5.2b (4,956 unknowns): a factorisation with its solve costs about 2.9 ms, a
-/// low-rank solve about 0.3 ms plus 0.1 ms per row first seen since the factorisation.
-/// Over whole runs the solve time per OCI iteration was 1.83 ms at 16, 1.85 at 24, 1.80
-/// at 40 and 2.02 at 64: flat from 16 to 40.
-const MAX_RANK: usize = 24;
+/// on paper 5.2b (4,956 unknowns, one run each) with the half-sweep low-rank solve
+/// (`BlockSystem::solve_low_rank`): solve seconds per OCI iteration 1.43 ms at 24, 1.34
+/// at 48, 1.12 at 64, 1.11 at 80, 1.03 at 96, 1.11 at 128 and 1.14 at 200 (a
+/// factorisation costs about 2.7 ms; beyond about 100 terms the capacitance matrix and
+/// the Gram products of the new columns cost as much). With full solves per column it
+/// had been 1.85 ms at 24 and 2.02 at 64.
+const MAX_RANK: usize = 96;
 
 /// How near (in d_tol, by separating-axis gap) two free blocks must be for a new matrix
 /// pattern to couple them before they have contacts. Measured on paper 5.2b (826 blocks,

@@ -17,6 +17,7 @@ mod locate;
 pub mod scene;
 pub mod springs;
 pub mod summary;
+mod supernodal;
 pub mod system;
 
 pub use self::checkpoint::{Checkpoint, CheckpointError, OutputMarks};

@@ -4,20 +4,23 @@
 //! stays fixed through the open-close iteration, so only values change between solves.
 //! The lower triangle is stored as a scalar CSC matrix with, for every block entry, the
 //! offset of each of its columns, so a 6x6 (or 3x3) term is added without searching.
-//! faer's sparse Cholesky factorises it: the symbolic analysis (ordering and elimination
-//! tree) is redone only when the pattern changes, the numeric factorisation goes into a
-//! preallocated buffer.
+//! faer's sparse (supernodal) Cholesky factorises it: the symbolic analysis (ordering and
+//! elimination tree) is redone only when the pattern changes, the numeric factorisation
+//! goes into a preallocated buffer. The triangular sweeps are ours (`supernodal`), so that
+//! a low-rank update of the factor needs only forward sweeps along short paths.
 
 use crate::kinematics::{Mat6, Vec6};
+use crate::supernodal::{Factor, Scratch, Tree, dot_over};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::amd;
 use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
+    CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
     factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
-use faer::{Conj, MatMut, Par, Side};
+use faer::{Par, Side};
 
 /// Parallelism of the factorisation and solve: sequential. Measured on the 830-block
 /// column (4,980 unknowns, 2 cores): `Par::rayon(2)` took 11.8 s over 5,617
@@ -71,12 +74,25 @@ pub struct BlockSystem {
     mem: MemBuffer,
     /// Whether `l_values` holds the factor of `values`.
     factored: bool,
-    /// Low-rank solves: K^-1 u for every u solved since the factorisation (column-major,
-    /// n per column), and each column's u.
+    /// The supernodal elimination tree of the factor.
+    tree: Tree,
+    /// Scratch of the triangular solves: one supernode's rows.
+    gather: Vec<f64>,
+    /// Scratch of the batched sweeps of new low-rank columns.
+    sweep: Scratch,
+    /// Low-rank solves: L^-1 u for every u solved since the factorisation (column-major,
+    /// n per column, zero outside its path), and each column's u.
     z: Vec<f64>,
     z_rows: Vec<([Option<u32>; 2], [Vec6; 2])>,
-    /// The solution of the factorised system, K^-1 F.
-    y0: Vec<f64>,
+    /// Per column of `z`: the supernodes it may be nonzero on (`paths[path_start[c]..
+    /// path_start[c + 1]]`, ascending).
+    paths: Vec<u32>,
+    path_start: Vec<usize>,
+    /// The Gram matrix of the columns of `z` (column j's products with columns 0..=j at
+    /// j (j + 1) / 2): U^T K^-1 U = (L^-1 U)^T (L^-1 U), kept as columns arrive.
+    gram: Vec<f64>,
+    /// The forward half of the factorised system's solution, L^-1 F.
+    h0: Vec<f64>,
     /// Per term of the current low-rank solve: its column in `z`.
     term_col: Vec<usize>,
     /// The capacitance matrix (row-major) and its right-hand side, then solution.
@@ -119,9 +135,15 @@ impl Default for BlockSystem {
             l_values: Vec::new(),
             mem: MemBuffer::new(StackReq::EMPTY),
             factored: false,
+            tree: Tree::default(),
+            gather: Vec::new(),
+            sweep: Scratch::default(),
             z: Vec::new(),
             z_rows: Vec::new(),
-            y0: Vec::new(),
+            paths: Vec::new(),
+            path_start: vec![0],
+            gram: Vec::new(),
+            h0: Vec::new(),
             term_col: Vec::new(),
             cap: Vec::new(),
             cap_rhs: Vec::new(),
@@ -221,19 +243,24 @@ impl BlockSystem {
         let (up_ptr, up_rows) = transpose_pattern(n, &col_ptr, &row_idx);
         self.pattern = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
         let a = SymbolicSparseColMatRef::new_checked(n, n, &up_ptr, None, &up_rows);
-        let symbolic = factorize_symbolic_cholesky(
-            a,
-            Side::Upper,
-            SymmetricOrdering::Identity,
-            CholeskySymbolicParams::default(),
-        )
-        .map_err(|e| SolveError::Symbolic(format!("{e:?}")))?;
-        let req = StackReq::any_of(&[
-            symbolic.factorize_numeric_llt_scratch::<f64>(PAR, Default::default()),
-            symbolic.solve_in_place_scratch::<f64>(1, PAR),
-        ]);
+        // Always supernodal: the low-rank path's solves walk its supernodes.
+        let params = CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+            ..Default::default()
+        };
+        let symbolic =
+            factorize_symbolic_cholesky(a, Side::Upper, SymmetricOrdering::Identity, params)
+                .map_err(|e| SolveError::Symbolic(format!("{e:?}")))?;
+        let SymbolicCholeskyRaw::Supernodal(sn) = symbolic.raw() else {
+            return Err(SolveError::Symbolic(
+                "faer chose a simplicial factor".into(),
+            ));
+        };
+        self.tree = Tree::new(sn);
+        let req = symbolic.factorize_numeric_llt_scratch::<f64>(PAR, Default::default());
         self.l_values.clear();
         self.l_values.resize(symbolic.len_val(), 0.0);
+        self.gather = Vec::with_capacity(Factor::new(sn, &self.l_values).max_rows());
         self.mem = MemBuffer::new(req);
         self.symbolic = Some(symbolic);
         self.symbolic_count += 1;
@@ -241,6 +268,11 @@ impl BlockSystem {
     }
 
     /// Orders the blocks by approximate minimum degree of the block graph into `pos`.
+    ///
+    /// Tried and dropped: nested dissection by breadth-first level sets (George and Liu)
+    /// down to parts of 24 blocks. On paper 5.2b it gave 2.5 times the factorisation flops
+    /// of minimum degree (7.5e7 against 2.7e7 on the first pattern): with the blocks'
+    /// corner contacts and the pattern margin the level sets are thick separators.
     fn order_blocks(&mut self) -> Result<(), SolveError> {
         let nb = self.nb;
         // Upper pattern of the block graph, column by column (faer reads A + A^T).
@@ -434,133 +466,194 @@ impl BlockSystem {
         self.factored = true;
         self.z.clear();
         self.z_rows.clear();
-        let llt = LltRef::new(symbolic, &self.l_values);
-        let rhs = MatMut::from_column_major_slice_mut(&mut self.rhs, n, 1);
-        llt.solve_in_place_with_conj(Conj::No, rhs, PAR, MemStack::new(&mut self.mem));
-        self.y0.clone_from(&self.rhs);
+        self.paths.clear();
+        self.path_start.truncate(1);
+        self.gram.clear();
+        self.resolve();
         Ok(())
     }
 
     /// Solves the right-hand side assembled since [`BlockSystem::clear_rhs`] with the
     /// factor of the last [`BlockSystem::solve`] (which may be of an earlier matrix);
-    /// false when there is no factor.
+    /// false when there is no factor. Keeps the forward half, L^-1 F.
     pub fn resolve(&mut self) -> bool {
-        let n = self.nb * self.nd;
-        let Some(symbolic) = self.symbolic.as_ref() else {
-            return false;
-        };
         if !self.factored {
             return false;
         }
-        if n > 0 {
-            let llt = LltRef::new(symbolic, &self.l_values);
-            let rhs = MatMut::from_column_major_slice_mut(&mut self.rhs, n, 1);
-            llt.solve_in_place_with_conj(Conj::No, rhs, PAR, MemStack::new(&mut self.mem));
-        }
+        let Some(factor) = factor_of(&self.symbolic, &self.l_values) else {
+            return false;
+        };
+        let mut g = std::mem::take(&mut self.gather);
+        factor.forward(&mut self.rhs, &mut g);
+        self.h0.clone_from(&self.rhs);
+        factor.backward(&mut self.rhs, &mut g);
+        self.gather = g;
         true
     }
 
     /// Solves (K + sum s u u^T) x = F + sum g v, where K and F are the matrix and
     /// right-hand side of the last [`BlockSystem::solve`], `terms` the rank-one changes of
     /// the matrix (u, s) and `rhs_terms` the changes of the right-hand side (v with its
-    /// coefficient g in `s`), by the Woodbury identity:
-    /// x = y - Z C^-1 U^T y with y = K^-1 F + sum g K^-1 v, Z = K^-1 U, C = S^-1 + U^T Z.
+    /// coefficient g in `s`), by the Woodbury identity in halves of K = L L^T:
+    /// x = L^-T (h - W C^-1 W^T h) with W = L^-1 U, h = L^-1 F + sum g L^-1 v and
+    /// C = S^-1 + W^T W.
     ///
-    /// K^-1 F is kept from the factorisation, and each K^-1 u is solved once per
-    /// factorisation and kept, so a row that stays in the lists from one call to the next
-    /// costs nothing more. Returns false when there is no valid factor or C is numerically
-    /// singular: the caller then assembles and factorises.
+    /// L^-1 F is kept from the factorisation; each L^-1 u is a forward sweep along the
+    /// path of u's blocks in the elimination tree, done once per factorisation and kept
+    /// with its products with the other kept columns, so a row that stays in the lists
+    /// from one call to the next costs nothing more. One backward sweep ends the solve.
+    /// Returns false when there is no valid factor or C is numerically singular: the
+    /// caller then assembles and factorises.
     pub fn solve_low_rank(&mut self, terms: &[RankOne], rhs_terms: &[RankOne]) -> bool {
         let n = self.nb * self.nd;
-        let Some(symbolic) = self.symbolic.as_ref() else {
-            return false;
-        };
         if !self.factored || terms.iter().any(|t| t.s == 0.0 || !t.s.is_finite()) {
             return false;
         }
+        let Some(factor) = factor_of(&self.symbolic, &self.l_values) else {
+            return false;
+        };
         if n == 0 {
             return true;
         }
-        // Columns of Z: reuse those already solved, solve the new ones together.
-        let first_new = self.z_rows.len();
+        let mut g = std::mem::take(&mut self.gather);
+        // Columns of W: reuse those already swept, sweep the new ones.
         self.term_col.clear();
+        let first_new = self.z_rows.len();
         for t in terms.iter().chain(rhs_terms) {
             let key = (t.blocks, t.c);
             let col = match self.z_rows.iter().position(|r| *r == key) {
                 Some(col) => col,
                 None => {
+                    let col = self.z_rows.len();
                     self.z_rows.push(key);
-                    self.z.resize(self.z_rows.len() * n, 0.0);
-                    let col = self.z_rows.len() - 1;
+                    self.z.resize((col + 1) * n, 0.0);
                     let (pos, nd) = (&self.pos, self.nd);
                     let zc = &mut self.z[col * n..(col + 1) * n];
-                    for (b, c) in t.blocks.iter().zip(&t.c) {
+                    let mut first_rows = [None; 2];
+                    for ((b, c), first) in t.blocks.iter().zip(&t.c).zip(&mut first_rows) {
                         if let Some(b) = b {
                             let p = pos[*b as usize] as usize * nd;
+                            *first = Some(p);
                             for (a, v) in zc[p..p + nd].iter_mut().enumerate() {
                                 *v += c[a];
                             }
                         }
                     }
+                    let cols = first_rows
+                        .into_iter()
+                        .flatten()
+                        .flat_map(|p| [p, p + nd - 1]);
+                    self.tree.path(cols, &mut self.paths);
+                    self.path_start.push(self.paths.len());
                     col
                 }
             };
             self.term_col.push(col);
         }
-        let added = self.z_rows.len() - first_new;
-        if added > 0 {
-            let req = symbolic.solve_in_place_scratch::<f64>(added, PAR);
-            if req.size_bytes() > self.mem.len() {
-                self.mem = MemBuffer::new(req);
+        if self.z_rows.len() > first_new {
+            let new = first_new..self.z_rows.len();
+            factor.forward_paths(
+                &mut self.z,
+                n,
+                &self.paths,
+                &self.path_start,
+                new.clone(),
+                &mut self.sweep,
+            );
+            // Their products with the columns before them and themselves.
+            for j in new {
+                let pj = path(&self.paths, &self.path_start, j);
+                for i in 0..=j {
+                    let pi = path(&self.paths, &self.path_start, i);
+                    let rows = factor.node_rows(common(pi, pj));
+                    let (zi, zj) = (&self.z[i * n..(i + 1) * n], &self.z[j * n..(j + 1) * n]);
+                    self.gram.push(dot_over(rows, zi, zj));
+                }
             }
-            let llt = LltRef::new(symbolic, &self.l_values);
-            let cols = MatMut::from_column_major_slice_mut(&mut self.z[first_new * n..], n, added);
-            llt.solve_in_place_with_conj(Conj::No, cols, PAR, MemStack::new(&mut self.mem));
         }
-        // y = K^-1 F + sum g K^-1 v.
-        self.rhs.copy_from_slice(&self.y0);
+        // h = L^-1 F + sum g L^-1 v.
+        self.rhs.copy_from_slice(&self.h0);
         let k = terms.len();
         for (t, &col) in rhs_terms.iter().zip(&self.term_col[k..]) {
-            for (y, z) in self.rhs.iter_mut().zip(&self.z[col * n..(col + 1) * n]) {
-                *y += t.s * z;
+            let zc = &self.z[col * n..(col + 1) * n];
+            for r in factor.path_rows(path(&self.paths, &self.path_start, col)) {
+                for (h, z) in self.rhs[r.clone()].iter_mut().zip(&zc[r]) {
+                    *h += t.s * z;
+                }
             }
         }
 
-        // C = S^-1 + U^T Z and U^T y.
+        // C = S^-1 + W^T W and W^T h.
         self.cap.clear();
         self.cap.resize(k * k, 0.0);
         self.cap_rhs.clear();
         for (i, t) in terms.iter().enumerate() {
-            for (j, &col) in self.term_col[..k].iter().enumerate() {
-                self.cap[i * k + j] = self.row_dot(t, &self.z[col * n..(col + 1) * n]);
+            let ci = self.term_col[i];
+            for (j, &cj) in self.term_col[..k].iter().enumerate() {
+                let (lo, hi) = (ci.min(cj), ci.max(cj));
+                self.cap[i * k + j] = self.gram[hi * (hi + 1) / 2 + lo];
             }
             self.cap[i * k + i] += 1.0 / t.s;
-            self.cap_rhs.push(self.row_dot(t, &self.rhs));
+            let zc = &self.z[ci * n..(ci + 1) * n];
+            self.cap_rhs.push(dot_over(
+                factor.path_rows(path(&self.paths, &self.path_start, ci)),
+                zc,
+                &self.rhs,
+            ));
         }
         if !lu_solve_in_place(&mut self.cap, &mut self.cap_rhs, k) {
+            self.gather = g;
             return false;
         }
         for (&col, &w) in self.term_col[..k].iter().zip(&self.cap_rhs) {
-            for (x, z) in self.rhs.iter_mut().zip(&self.z[col * n..(col + 1) * n]) {
-                *x -= w * z;
+            let zc = &self.z[col * n..(col + 1) * n];
+            for r in factor.path_rows(path(&self.paths, &self.path_start, col)) {
+                for (h, z) in self.rhs[r.clone()].iter_mut().zip(&zc[r]) {
+                    *h -= w * z;
+                }
             }
         }
+        factor.backward(&mut self.rhs, &mut g);
+        self.gather = g;
         self.low_rank_count += 1;
         true
     }
+}
 
-    /// u . v for a term's row u and a vector v in permuted order.
-    fn row_dot(&self, t: &RankOne, v: &[f64]) -> f64 {
-        let nd = self.nd;
-        let mut s = 0.0;
-        for (b, c) in t.blocks.iter().zip(&t.c) {
-            if let Some(b) = b {
-                let p = self.pos[*b as usize] as usize * nd;
-                s += (0..nd).map(|a| c[a] * v[p + a]).sum::<f64>();
+/// The factor with symbolic structure `symbolic` and values `l`, once the symbolic
+/// analysis is done.
+fn factor_of<'a>(
+    symbolic: &'a Option<SymbolicCholesky<usize>>,
+    l: &'a [f64],
+) -> Option<Factor<'a>> {
+    match symbolic.as_ref()?.raw() {
+        SymbolicCholeskyRaw::Supernodal(sn) => Some(Factor::new(sn, l)),
+        SymbolicCholeskyRaw::Simplicial(_) => None,
+    }
+}
+
+/// The supernodes column `col` of the kept columns may be nonzero on.
+fn path<'a>(paths: &'a [u32], start: &[usize], col: usize) -> &'a [u32] {
+    &paths[start[col]..start[col + 1]]
+}
+
+/// The supernodes two ascending lists have in common, ascending.
+fn common<'a>(a: &'a [u32], b: &'a [u32]) -> impl Iterator<Item = u32> + 'a {
+    let (mut i, mut j) = (0, 0);
+    std::iter::from_fn(move || {
+        while i < a.len() && j < b.len() {
+            match a[i].cmp(&b[j]) {
+                std::cmp::Ordering::Less => i += 1,
+                std::cmp::Ordering::Greater => j += 1,
+                std::cmp::Ordering::Equal => {
+                    i += 1;
+                    j += 1;
+                    return Some(a[i - 1]);
+                }
             }
         }
-        s
-    }
+        None
+    })
 }
 
 /// A symmetric rank-one change `s u u^T` of the factorised matrix, `u` a row over the
@@ -794,5 +887,176 @@ mod tests {
                 assert!(res.abs() < 1e-12, "nd {nd} row {r}: residual {res}");
             }
         }
+    }
+
+    /// Adds `t.s u u^T` (a spring between two blocks, or to a fixed one) to the matrix.
+    fn add_rank_one(sys: &mut BlockSystem, t: &RankOne) {
+        let on: Vec<(u32, &Vec6)> = t
+            .blocks
+            .iter()
+            .zip(&t.c)
+            .filter_map(|(b, c)| b.map(|b| (b, c)))
+            .collect();
+        for &(b, c) in &on {
+            sys.add_outer(sys.diagonal(b), b, b, t.s, c, c);
+        }
+        if let [(i, ci), (j, cj)] = on[..] {
+            let e = sys.entry(i, j).expect("coupled");
+            sys.add_outer(e, i, j, t.s, ci, cj);
+        }
+    }
+
+    /// K x for the stored lower triangle, x and the result in permuted order; and the
+    /// largest absolute row sum of K.
+    fn matvec(sys: &BlockSystem, x: &[f64]) -> (Vec<f64>, f64) {
+        let n = x.len();
+        let (mut y, mut rows) = (vec![0.0; n], vec![0.0; n]);
+        let (ptr, idx) = (sys.pattern.col_ptr(), sys.pattern.row_idx());
+        for c in 0..n {
+            for k in ptr[c]..ptr[c + 1] {
+                let (r, v) = (idx[k], sys.values[k]);
+                y[r] += v * x[c];
+                rows[r] += v.abs();
+                if r != c {
+                    y[c] += v * x[r];
+                    rows[c] += v.abs();
+                }
+            }
+        }
+        (y, rows.iter().fold(0.0, |m: f64, v| m.max(*v)))
+    }
+
+    /// On a 20 x 20 grid of blocks (2,400 unknowns, elimination-tree paths much shorter
+    /// than the factor), low-rank solves after stiff springs are added, removed and tied
+    /// to fixed blocks, with right-hand side terms, satisfy the changed system: residual
+    /// within the bound of a Woodbury solve, and the sweeps of the new columns cover
+    /// only part of the factor.
+    #[test]
+    fn low_rank_solve_on_a_grid_matches_the_changed_matrix() {
+        let (w, nd) = (20u32, 6usize);
+        let nb = (w * w) as usize;
+        let mut pairs = Vec::new();
+        for y in 0..w {
+            for x in 0..w {
+                let i = y * w + x;
+                if x + 1 < w {
+                    pairs.push((i, i + 1));
+                }
+                if y + 1 < w {
+                    pairs.push((i, i + w));
+                    if x + 1 < w {
+                        pairs.push((i, i + w + 1));
+                    }
+                }
+            }
+        }
+        pairs.sort_unstable();
+        let mut rnd = rng(11);
+        let (k_block, p) = (1e8, 1e10);
+        let mut spring = |(i, j): (u32, u32), s: f64| RankOne {
+            blocks: [Some(i), Some(j)],
+            c: [
+                std::array::from_fn(|_| rnd()),
+                std::array::from_fn(|_| rnd()),
+            ],
+            s,
+        };
+        // Springs of the factorised matrix on the even pairs; new ones on the odd pairs.
+        let base: Vec<RankOne> = pairs.iter().step_by(2).map(|&q| spring(q, p)).collect();
+        let added: Vec<RankOne> = pairs
+            .iter()
+            .skip(1)
+            .step_by(13)
+            .map(|&q| spring(q, p))
+            .collect();
+        let removed: Vec<RankOne> = base
+            .iter()
+            .step_by(11)
+            .map(|t| RankOne { s: -t.s, ..*t })
+            .collect();
+        let mut to_fixed: Vec<RankOne> = (0..5u32)
+            .map(|k| RankOne {
+                blocks: [Some(k * 37), None],
+                ..spring((0, 1), p)
+            })
+            .collect();
+        let loads: Vec<RankOne> = (0..4u32).map(|k| spring((k, k + w), 1e3)).collect();
+        let f: Vec<f64> = (0..nb * nd).map(|k| (k % 7) as f64 - 3.0).collect();
+        let assemble = |sys: &mut BlockSystem, springs: &[&RankOne], loads: &[RankOne]| {
+            sys.clear();
+            for i in 0..nb as u32 {
+                let mut k = [[0.0; 6]; 6];
+                for a in 0..nd {
+                    k[a][a] = k_block;
+                }
+                sys.add_diagonal(i, &k);
+                let fi: Vec6 = std::array::from_fn(|a| f[i as usize * nd + a]);
+                sys.add_rhs(i, 1.0, &fi);
+            }
+            for t in springs {
+                add_rank_one(sys, t);
+            }
+            for t in loads {
+                for (b, c) in t.blocks.iter().zip(&t.c) {
+                    if let Some(b) = b {
+                        sys.add_rhs(*b, t.s, c);
+                    }
+                }
+            }
+        };
+        let mut sys = BlockSystem::new();
+        sys.set_pattern(nb, nd, &pairs).unwrap();
+        assemble(&mut sys, &base.iter().collect::<Vec<_>>(), &[]);
+        sys.solve().unwrap();
+
+        to_fixed.truncate(3);
+        let first: Vec<RankOne> = added.iter().chain(&removed).copied().collect();
+        let second: Vec<RankOne> = first.iter().chain(&to_fixed).copied().collect();
+        for (terms, rhs_terms) in [(&first, &loads[..2]), (&second, &loads[..])] {
+            assert!(sys.solve_low_rank(terms, rhs_terms));
+            let x = sys.rhs.clone();
+            // The changed system, assembled and checked directly.
+            let mut direct = BlockSystem::new();
+            direct.set_pattern(nb, nd, &pairs).unwrap();
+            let kept = base
+                .iter()
+                .enumerate()
+                .filter(|(k, _)| k % 11 != 0)
+                .map(|(_, t)| t);
+            let springs: Vec<&RankOne> = kept.chain(terms.iter().filter(|t| t.s > 0.0)).collect();
+            assemble(&mut direct, &springs, rhs_terms);
+            let (kx, norm) = matvec(&direct, &x);
+            let x_max = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let res = kx
+                .iter()
+                .zip(&direct.rhs)
+                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            // A backward-stable solve leaves a residual of order sqrt(n) eps |K| |x|; the
+            // Woodbury form loses up to p / k_block more to cancellation in C (a removed
+            // spring's S^-1 + u^T K^-1 u), and we allow a factor 10 of slack:
+            // sqrt(2400) * 2.2e-16 * 100 * 10 = 1.1e-11.
+            let bound = (nb as f64 * nd as f64).sqrt() * f64::EPSILON * (p / k_block) * 10.0;
+            assert!(
+                res <= bound * norm * x_max,
+                "residual {res:e} against {:e}",
+                bound * norm * x_max
+            );
+        }
+        // The columns were swept along paths, not over the whole factor.
+        let factor = factor_of(&sys.symbolic, &sys.l_values).unwrap();
+        let n = nb * nd;
+        let shortest = (0..sys.z_rows.len())
+            .map(|c| {
+                factor
+                    .path_rows(path(&sys.paths, &sys.path_start, c))
+                    .map(|r| r.len())
+                    .sum::<usize>()
+            })
+            .min()
+            .unwrap();
+        assert!(
+            shortest < n / 4,
+            "shortest path covers {shortest} of {n} rows"
+        );
     }
 }
