@@ -79,7 +79,9 @@ pub trait ContactDetector: Send + Sync + fmt::Debug {
     }
 
     /// Whether an inactive candidate becomes active, given its measures at step start and
-    /// after the trial displacement.
+    /// after the trial displacement. Asked only when the vertex was outside the edge's line
+    /// at step start and is behind it in the trial (d_n0 > 0 > d_n1, the trigger of
+    /// trajectory tracking, paper 2.3.2): [`track`] skips every other candidate unmeasured.
     fn activates(&self, _start: VertexEdge, _trial: VertexEdge) -> bool {
         false
     }
@@ -280,7 +282,8 @@ pub fn track(
     }
     let moved = |block: u32, p: DVec2| trial[block as usize].apply(p);
     let mut changed = 0;
-    for c in set.contacts.iter_mut().filter(|c| !c.active) {
+    // The trigger: outside the edge's line at step start (d_n0 > 0).
+    for c in set.contacts.iter_mut().filter(|c| !c.active && c.d_n > 0.0) {
         let k = c.key;
         let (vs, es) = (
             &shapes[k.vertex_block as usize],
@@ -291,11 +294,17 @@ pub fn track(
             es.vertices[k.edge as usize],
             es.vertices[es.next(k.edge as usize)],
         );
-        let trial_m = VertexEdge::new(
+        let (a1, b0, b1) = (
             moved(k.vertex_block, a),
             moved(k.edge_block, b0),
             moved(k.edge_block, b1),
         );
+        // The trigger: behind the edge's line in the trial (the sign of d_n1).
+        let (e, w) = (b1 - b0, a1 - b0);
+        if w.x * e.y - w.y * e.x >= 0.0 {
+            continue;
+        }
+        let trial_m = VertexEdge::new(a1, b0, b1);
         if detector.activates(VertexEdge { d_n: c.d_n, r: c.r }, trial_m) {
             // Lock where the trajectory crossed the edge's line (0 <= t <= 1).
             let t = c.d_n / (c.d_n - trial_m.d_n);
