@@ -96,7 +96,13 @@ pub fn run(o: &Options) -> Result<(), String> {
         );
         let result = sim.run(|s, _| {
             if s.totals().steps % 20 == 0 {
-                eprintln!("  t = {:.4} s, {} steps", s.time(), s.totals().steps);
+                eprintln!(
+                    "  t = {:.4} s, {} steps, dt {:.2e} s, {} cuts",
+                    s.time(),
+                    s.totals().steps,
+                    s.time_step(),
+                    s.totals().cuts
+                );
             }
         });
         let t = sim.totals();
