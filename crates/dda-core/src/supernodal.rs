@@ -1,11 +1,12 @@
-//! Triangular solves with faer's supernodal Cholesky factor K = L L^T, one right-hand
-//! side at a time: the whole forward (L) and backward (L^T) sweeps, and the forward sweep
-//! of a sparse right-hand side along its path in the supernodal elimination tree.
+//! Triangular solves with faer's supernodal Cholesky factor K = L L^T: the whole forward
+//! (L) and backward (L^T) sweeps of one right-hand side, and the forward sweeps of sparse
+//! right-hand sides along their paths in the supernodal elimination tree, together.
 //!
 //! The open-close iteration changes a few dozen springs against the factorised matrix;
 //! its low-rank solve (`BlockSystem::solve_low_rank`) needs L^-1 u for the row u of each
 //! changed spring. Such a row touches the unknowns of two blocks, so L^-1 u is nonzero
-//! only on the supernodes from theirs up to the root: a few percent of the factor, where
+//! only on the supernodes from theirs up to the root (about a fifth of the rows of the
+//! 826-block column's factor, the large separators near the root included), where
 //! a full solve reads all of it twice.
 
 use faer::linalg::matmul::matmul;
