@@ -247,6 +247,20 @@ pub(crate) fn dot_over(
     ranges.map(|r| dot(&u[r.clone()], &v[r])).sum()
 }
 
+/// y += a x over the rows of `ranges`.
+pub(crate) fn axpy_over(
+    ranges: impl Iterator<Item = std::ops::Range<usize>>,
+    a: f64,
+    x: &[f64],
+    y: &mut [f64],
+) {
+    for r in ranges {
+        for (yi, xi) in y[r.clone()].iter_mut().zip(&x[r]) {
+            *yi += a * xi;
+        }
+    }
+}
+
 /// u . v, summed in eight interleaved lanes so that it vectorises (a plain sum of f64 does
 /// not: its order is fixed). That order is fixed too, so results are reproducible.
 pub(crate) fn dot(u: &[f64], v: &[f64]) -> f64 {

@@ -10,7 +10,7 @@
 //! a low-rank update of the factor needs only forward sweeps along short paths.
 
 use crate::kinematics::{Mat6, Vec6};
-use crate::supernodal::{Factor, Scratch, Tree, dot_over};
+use crate::supernodal::{Factor, Scratch, Tree, axpy_over, dot_over};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::SupernodalThreshold;
@@ -575,12 +575,8 @@ impl BlockSystem {
         self.rhs.copy_from_slice(&self.h0);
         let k = terms.len();
         for (t, &col) in rhs_terms.iter().zip(&self.term_col[k..]) {
-            let zc = &self.z[col * n..(col + 1) * n];
-            for r in factor.path_rows(path(&self.paths, &self.path_start, col)) {
-                for (h, z) in self.rhs[r.clone()].iter_mut().zip(&zc[r]) {
-                    *h += t.s * z;
-                }
-            }
+            let rows = factor.path_rows(path(&self.paths, &self.path_start, col));
+            axpy_over(rows, t.s, &self.z[col * n..(col + 1) * n], &mut self.rhs);
         }
 
         // C = S^-1 + W^T W and W^T h.
@@ -606,12 +602,8 @@ impl BlockSystem {
             return false;
         }
         for (&col, &w) in self.term_col[..k].iter().zip(&self.cap_rhs) {
-            let zc = &self.z[col * n..(col + 1) * n];
-            for r in factor.path_rows(path(&self.paths, &self.path_start, col)) {
-                for (h, z) in self.rhs[r.clone()].iter_mut().zip(&zc[r]) {
-                    *h -= w * z;
-                }
-            }
+            let rows = factor.path_rows(path(&self.paths, &self.path_start, col));
+            axpy_over(rows, -w, &self.z[col * n..(col + 1) * n], &mut self.rhs);
         }
         factor.backward(&mut self.rhs, &mut g);
         self.gather = g;
