@@ -31,13 +31,20 @@
 //!   and the cost stays flat as d_tol grows.
 //! - The distance filter runs before the entrance filter (both must pass; the cheaper
 //!   rejection first).
-//! - A cover closed at the end of a step stays a candidate (active, its state inherited)
-//!   while its vertex is over the edge and behind it, even deeper than d_tol, where the
-//!   distance filter (eq. 10) would drop it: with a small penalty a penetration can
-//!   exceed d_tol, and dropping the contact then lets the blocks pass through each other
-//!   (found by the hard-pair property tests: a 3 deg wedge at 1 m/s with p = 1e6 and
-//!   d_tol = 1.2 mm went through a 15 deg wedge). The type-based detectors keep the
-//!   paper's behaviour.
+//! - Penetrations deeper than d_tol, which a penalty too soft for d_tol allows (the paper
+//!   assumes they do not occur, section 2.6), keep pushing the blocks apart rather than
+//!   let them pass through each other, where the distance filter (eq. 10) would drop
+//!   the covers that matter. For a pair in closed contact at the end of the last step:
+//!   if it now overlaps deeper than d_tol, its active covers are the faces of the
+//!   entrance block attaining d_RE2 without the distance filter, whose d_n is minus the
+//!   overlap (see [`deep_covers`]); otherwise a cover closed then stays active while its
+//!   vertex is behind its edge's line, moved to the adjacent edge when the vertex
+//!   slides past an end of its edge and that edge's line is nearer. Found by the
+//!   hard-pair property tests: a 3 deg wedge at 1 m/s with p = 1e6 and d_tol = 1.2 mm
+//!   went through a 15 deg wedge; a chamfered square's corner slid 13 mm deep past the
+//!   end of the edge it entered and went through; a spinning wedge's tip swept into the
+//!   block its edge was pressed against. The type-based detectors keep the paper's
+//!   behaviour.
 
 use crate::contact::{Contact, ContactKey};
 use crate::detector::{ContactDetector, DetectionParams};
@@ -184,6 +191,88 @@ pub(crate) fn choose_active(
     Some(d_re2)
 }
 
+/// Whether convex blocks `a` and `b` overlap deeper than `d`: every edge of each has a
+/// vertex of the other more than `d` behind its line (the separating-axis test, each edge
+/// stopping at the first such vertex).
+fn overlap_deeper(a: &BlockShape, b: &BlockShape, d: f64) -> bool {
+    [(a, b), (b, a)].iter().all(|(vs, es)| {
+        (0..es.len()).all(|j| {
+            let (b0, t) = (es.vertices[j], es.tangents[j]);
+            vs.vertices.iter().any(|&v| {
+                let w = v - b0;
+                w.x * t.y - w.y * t.x < -d
+            })
+        })
+    })
+}
+
+/// The covers of a pair of blocks that were in closed contact at the end of the previous
+/// step and now overlap deeper than d_tol, where the distance filter (eq. 10) would drop
+/// the covers that matter: the pair's candidates (`list[start..]`) take their activity
+/// from the whole cover list without the distance filter, whose active covers are added.
+/// Returns false, changing nothing, if the overlap is not deeper than d_tol.
+///
+/// Our choice (the paper assumes penetrations below d_tol, section 2.6, which a penalty
+/// too soft for d_tol breaks). The active covers are then the faces of the entrance
+/// block attaining d_RE2 (eq. 11), whose d_n is minus the overlap (the least translation
+/// that separates the blocks), with their quasi-parallel companions: the same rule as
+/// within d_tol, so nothing jumps at d_tol. A spring on such a face measures the overlap
+/// itself, a continuous function of the positions (where the deepest face changes, the
+/// two faces' d_n are equal), so the springs store p d^2 / 2 of the overlap d and the
+/// energy bounds it. No spring starts this deep beside those closed at the end of the
+/// previous step (`before`): one would store energy from nowhere (found by the tests: a
+/// plate's end turning parallel to the face it was pressed 19 mm into gained a second
+/// spring and 30% of the energy). Keeping the contacts closed last step instead (found by the
+/// hard-pair property tests) left a spinning wedge's tip to sweep into the block its edge
+/// was pressed against, with no candidate listed for the tip.
+pub(crate) fn deep_covers(
+    a: &BlockShape,
+    b: &BlockShape,
+    ids: NeighbourPair,
+    params: &DetectionParams,
+    before: &[Contact],
+    start: usize,
+    list: &mut Vec<Contact>,
+) -> bool {
+    if !overlap_deeper(a, b, params.d_tol) {
+        return false;
+    }
+    let mut all = Vec::new();
+    let unfiltered = params.with_d_tol(f64::INFINITY);
+    vertex_edge_loop(a, ids.a, b, ids.b, &unfiltered, &mut all);
+    vertex_edge_loop(b, ids.b, a, ids.a, &unfiltered, &mut all);
+    let Some(d_re2) = choose_active(&mut all, ids, a, b, params) else {
+        return false;
+    };
+    // Only faces attaining d_RE2 carry springs this deep: those closed at the end of the
+    // last step, or else one of them (the first in key order), which takes over from the
+    // last deepest face at the d_n it had. A spring joining beside them would start this
+    // deep and store energy from nowhere (a plate's end turning parallel to the face it
+    // is pressed into brings its second vertex in at the first one's depth).
+    let tie = d_re2 - 1e-9 * params.d_tol;
+    let attains = |m: &Contact| m.d_n >= tie && is_face(m, ids, a, b) && (0.0..=1.0).contains(&m.r);
+    for m in all.iter_mut() {
+        let closed = before
+            .iter()
+            .any(|o| o.key == m.key && o.active && o.state.is_closed());
+        m.active = closed && attains(m);
+    }
+    if !all.iter().any(|m| m.active)
+        && let Some(m) = all.iter_mut().filter(|m| attains(m)).min_by_key(|m| m.key)
+    {
+        m.active = true;
+    }
+    for c in list[start..].iter_mut() {
+        c.active = all.iter().any(|m| m.active && m.key == c.key);
+    }
+    for m in all.iter().filter(|m| m.active) {
+        if !list[start..].iter().any(|c| c.key == m.key) {
+            list.push(*m);
+        }
+    }
+    true
+}
+
 impl CoverDetector {
     /// The contact cover list C^L of the pair `ids` (vertex-edge loop, then edge-vertex
     /// loop), appended to `out` with initial activity; returns d_RE2 (eq. 11), or `None`
@@ -297,6 +386,73 @@ mod tests {
         assert_eq!(c.state, crate::ContactState::Locked);
     }
 
+    /// Step-start detection of the pair `IDS` of `shapes` after the contacts `previous`.
+    fn detect_pair_set(shapes: &[BlockShape], previous: &ContactSet) -> ContactSet {
+        let mut set = ContactSet::default();
+        crate::detect(
+            &CoverDetector,
+            shapes,
+            &[IDS],
+            &params(),
+            previous,
+            false,
+            &mut set,
+        );
+        set
+    }
+
+    #[test]
+    fn a_deep_overlap_pushes_along_the_least_separating_translation() {
+        // A's corner (0.85, 0.8) entered B's top edge (edge 2) and closed there; it is now
+        // 0.2 below that edge and 0.15 inside B's right edge (edge 1), deeper than
+        // d_tol = 0.1 both ways. The least translation that separates the blocks is 0.15
+        // to the right: the face of A's corner against B's right edge carries the spring,
+        // not the 0.2 of the edge it entered (which the distance filter no longer lists).
+        let a = shape(&[[0.85, 0.8], [1.85, 0.8], [1.85, 1.8], [0.85, 1.8]]);
+        let b = shape(&[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]);
+        let shapes = [a, b];
+        let closed = |edge: u32| {
+            let mut c = Contact::new(
+                ContactKey {
+                    vertex_block: 0,
+                    vertex: 0,
+                    edge_block: 1,
+                    edge,
+                },
+                -0.2,
+                0.85,
+                true,
+            );
+            c.state = crate::ContactState::Sliding;
+            c
+        };
+        let detect_after = |before: Vec<Contact>| {
+            let previous = ContactSet {
+                pairs: vec![crate::contact::PairContacts {
+                    pair: IDS,
+                    start: 0,
+                    end: before.len() as u32,
+                }],
+                contacts: before,
+            };
+            detect_pair_set(&shapes, &previous)
+        };
+        let set = detect_after(vec![closed(2)]);
+        let active: Vec<_> = set.active().map(|c| (tuple(c.key), c.d_n)).collect();
+        assert_eq!(active.len(), 1, "{active:?}");
+        assert_eq!(active[0].0, (0, 0, 1, 1));
+        assert!((active[0].1 + 0.15).abs() < 1e-12);
+        // Already closed on that face, it stays the only spring: B's corner (1, 1) against
+        // A's left edge attains the same d_n but would start a second spring this deep.
+        let set = detect_after(vec![closed(1)]);
+        let active: Vec<_> = set.active().map(|c| tuple(c.key)).collect();
+        assert_eq!(active, vec![(0, 0, 1, 1)]);
+        // Not closed last step (a pair that was apart): no deep rule, nothing listed.
+        let mut apart = closed(2);
+        apart.state = crate::ContactState::Open;
+        assert_eq!(detect_after(vec![apart]).active().count(), 0);
+    }
+
     #[test]
     fn corner_to_corner_is_decided_by_the_trajectory() {
         // A's lower-right corner (1, 1.05) approaches B's upper-left corner (1.05, 1)
@@ -304,16 +460,7 @@ mod tests {
         let a = shape(&[[0.0, 1.05], [1.0, 1.05], [1.0, 2.05], [0.0, 2.05]]);
         let b = shape(&[[1.05, 0.0], [2.05, 0.0], [2.05, 1.0], [1.05, 1.0]]);
         let shapes = [a, b];
-        let mut set = ContactSet::default();
-        crate::detect(
-            &CoverDetector,
-            &shapes,
-            &[IDS],
-            &params(),
-            &ContactSet::default(),
-            false,
-            &mut set,
-        );
+        let set = detect_pair_set(&shapes, &ContactSet::default());
         assert!(!set.is_empty());
         assert_eq!(set.active().count(), 0);
         // A moves by (0.12, -0.08), B fixed: A's corner crosses the line of B's top edge

@@ -2,7 +2,7 @@
 //! detection over all neighbour pairs with state inheritance ([`detect`]), and the
 //! open-close-iteration update from trial displacements ([`track`]).
 
-use crate::contact::{Contact, ContactSet, PairContacts};
+use crate::contact::{Contact, ContactKey, ContactSet, PairContacts};
 use crate::cover::CoverDetector;
 use crate::neighbour::NeighbourPair;
 use crate::shape::BlockShape;
@@ -31,6 +31,11 @@ impl DetectionParams {
             theta_e,
             sin_theta_e: theta_e.sin(),
         }
+    }
+
+    /// The same tolerances with contact tolerance `d_tol`.
+    pub(crate) fn with_d_tol(self, d_tol: f64) -> Self {
+        DetectionParams { d_tol, ..self }
     }
 
     /// The entrance angle tolerance theta_e, radians.
@@ -71,9 +76,10 @@ pub trait ContactDetector: Send + Sync + fmt::Debug {
         false
     }
 
-    /// Whether a contact closed at the end of the previous step stays a candidate while
-    /// its vertex is still over the edge and behind it, however deep (beyond d_tol, where
-    /// the distance filter would drop it).
+    /// Whether a contact closed at the end of the previous step stays a candidate while its
+    /// vertex is behind the edge's line, however deep (beyond d_tol, where the distance
+    /// filter would drop it), moved to the adjacent edge when the vertex slides past an
+    /// end of its edge.
     fn keeps_closed_contacts(&self) -> bool {
         false
     }
@@ -148,7 +154,18 @@ fn detect_range(
             Some(p) if p.pair == pair => previous.of_pair(prev_k),
             _ => &[],
         };
-        if detector.keeps_closed_contacts() {
+        if detector.keeps_closed_contacts()
+            && before.iter().any(|c| c.active && c.state.is_closed())
+            && !crate::cover::deep_covers(
+                &shapes[pair.a as usize],
+                &shapes[pair.b as usize],
+                pair,
+                params,
+                before,
+                start,
+                list,
+            )
+        {
             keep_closed(shapes, before, start, list);
         }
         if list.len() == start {
@@ -184,28 +201,52 @@ fn detect_range(
 
 /// Appends, as active candidates, the contacts closed at the end of the previous step
 /// (`before`, sorted) that the detector did not list (those at `list[start..]`) but whose
-/// vertex is still over its edge (0 <= r <= 1) and behind it (d_n < 0): a penetration
-/// deeper than d_tol, which a small penalty allows, must keep pushing the blocks apart
-/// rather than let them pass through each other. States are inherited after.
+/// vertex is still behind its edge's line (d_n < 0): a penetration deeper than d_tol,
+/// which a small penalty allows, must keep pushing the blocks apart rather than let them
+/// pass through each other. A vertex that slid past an end of its edge (r outside
+/// [0, 1]) has its contact moved to the adjacent edge on that side while that edge's line
+/// is nearer (the walk repeats along the boundary, and ends outside the block if the
+/// vertex has left it over an end): the move never lengthens the spring, so it stores no
+/// energy, and the contact stays on the face the vertex entered rather than jump to the
+/// block's far side (a vertex deep in a thin plate is nearer the far face, and a spring
+/// to it pushes the vertex through). States are inherited after, where the key is the
+/// same.
 fn keep_closed(shapes: &[BlockShape], before: &[Contact], start: usize, list: &mut Vec<Contact>) {
     let listed = list.len();
     for old in before.iter().filter(|o| o.active && o.state.is_closed()) {
-        if list[start..listed].iter().any(|c| c.key == old.key) {
+        let k = old.key;
+        if list[start..listed].iter().any(|c| c.key == k) {
             continue;
         }
-        let k = old.key;
         let (vs, es) = (
             &shapes[k.vertex_block as usize],
             &shapes[k.edge_block as usize],
         );
-        let m = VertexEdge::new(
-            vs.vertices[k.vertex as usize],
-            es.vertices[k.edge as usize],
-            es.vertices[es.next(k.edge as usize)],
-        );
-        if m.d_n < 0.0 && (0.0..=1.0).contains(&m.r) {
-            list.push(Contact::new(k, m.d_n, m.r, true));
+        let a = vs.vertices[k.vertex as usize];
+        let measure = |j: usize| VertexEdge::new(a, es.vertices[j], es.vertices[es.next(j)]);
+        let (mut j, mut m) = (k.edge as usize, measure(k.edge as usize));
+        for _ in 0..es.len() {
+            let side = if m.r < 0.0 {
+                es.prev(j)
+            } else if m.r > 1.0 {
+                es.next(j)
+            } else {
+                break;
+            };
+            let n = measure(side);
+            if n.d_n <= m.d_n {
+                break;
+            }
+            (j, m) = (side, n);
         }
+        let key = ContactKey {
+            edge: j as u32,
+            ..k
+        };
+        if m.d_n >= 0.0 || list[start..].iter().any(|c| c.key == key) {
+            continue;
+        }
+        list.push(Contact::new(key, m.d_n, m.r, true));
     }
 }
 
