@@ -460,3 +460,33 @@ fn warnings_name_file_and_line() {
     assert!(err.contains("warning"), "{err}");
     assert!(err.contains(&format!("warn.toml:{line}")), "{err}");
 }
+
+/// A penalty too soft for the contact tolerance (paper section 2.6) gets a warning after
+/// the run, exactly when the summary's largest penetration exceeds the tolerance.
+#[test]
+fn a_penalty_too_soft_for_the_tolerance_is_warned_of() {
+    let dir = scratch("soft-penalty");
+    for (penalty, name) in [("1e9", "stiff"), ("2e6", "soft")] {
+        let text = std::fs::read_to_string(SCENE).unwrap().replace(
+            "normal_penalty = 1e9",
+            &format!("normal_penalty = {penalty}"),
+        );
+        let file = dir.join(format!("{name}.toml"));
+        std::fs::write(&file, &text).unwrap();
+        let out = dir.join(name);
+        let o = dda(&[
+            "run",
+            file.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{o:?}");
+        let s = summary(&out);
+        let deeper =
+            s["max_penetration"].as_f64().unwrap() > s["contact_tolerance"].as_f64().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(err.contains("too soft"), deeper, "{name}: {err}");
+        // The soft one does go deeper than d_tol; the stiff one does not.
+        assert_eq!(deeper, name == "soft", "{name}: {s}");
+    }
+}

@@ -407,6 +407,18 @@ impl Job {
             );
             eprintln!("wrote {}", self.out.display());
         }
+        if summary.max_penetration > summary.contact_tolerance {
+            // The paper's working rule (section 2.6): contacts are found within d_tol, so a
+            // deeper penetration means the penalty is too soft for the tolerance.
+            eprintln!(
+                "warning: the largest penetration, {:.3e} m, exceeded the contact tolerance \
+                 {:.3e} m: `analysis.normal_penalty` ({:.3e} N/m) is too soft for it \
+                 (paper section 2.6); raise it, or `analysis.contact_tolerance`",
+                summary.max_penetration,
+                summary.contact_tolerance,
+                self.sim.model().params.normal_penalty
+            );
+        }
         match error {
             Some(e) => {
                 eprintln!("error: the simulation cannot go on: {e}");
