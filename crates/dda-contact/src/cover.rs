@@ -213,11 +213,11 @@ fn overlap_deeper(a: &BlockShape, b: &BlockShape, d: f64) -> bool {
 /// Returns false, changing nothing, if the overlap is not deeper than d_tol.
 ///
 /// Our choice (the paper assumes penetrations below d_tol, section 2.6, which a penalty
-/// too soft for d_tol breaks). The active covers are then the faces of the entrance
-/// block attaining d_RE2 (eq. 11), whose d_n is minus the overlap (the least translation
-/// that separates the blocks), with their quasi-parallel companions: the same rule as
-/// within d_tol, so nothing jumps at d_tol. A spring on such a face measures the overlap
-/// itself, a continuous function of the positions (where the deepest face changes, the
+/// too soft for d_tol breaks). The active covers are then faces of the entrance block
+/// attaining d_RE2 (eq. 11) over the whole list, whose d_n is minus the overlap (the
+/// least translation that separates the blocks): the face rule of eq. 11 without the
+/// distance filter, and without quasi-parallel companions. A spring on such a face
+/// measures the overlap itself, a continuous function of the positions (where the deepest face changes, the
 /// two faces' d_n are equal), so the springs store p d^2 / 2 of the overlap d and the
 /// energy bounds it. No spring starts this deep beside those closed at the end of the
 /// previous step (`before`): one would store energy from nowhere (found by the tests: a
@@ -241,7 +241,7 @@ pub(crate) fn deep_covers(
     let unfiltered = params.with_d_tol(f64::INFINITY);
     vertex_edge_loop(a, ids.a, b, ids.b, &unfiltered, &mut all);
     vertex_edge_loop(b, ids.b, a, ids.a, &unfiltered, &mut all);
-    let Some(d_re2) = choose_active(&mut all, ids, a, b, params) else {
+    let Some(d_re2) = d_re2(&all, ids, a, b) else {
         return false;
     };
     // Only faces attaining d_RE2 carry springs this deep: those closed at the end of the
