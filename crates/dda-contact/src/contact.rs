@@ -107,6 +107,10 @@ pub struct PairContacts {
     pub start: u32,
     /// One past its last contact.
     pub end: u32,
+    /// Whether the pair overlapped deeper than d_tol at step start with a closed contact
+    /// kept from the last step (the cover detector's deep rule, `cover::deep_covers`):
+    /// its spring then follows the deepest face during open-close iteration.
+    pub deep: bool,
 }
 
 /// All candidate contacts of a step, grouped by neighbour pair; pairs sorted, contacts of

@@ -37,7 +37,9 @@
 //!   the covers that matter. For a pair in closed contact at the end of the last step:
 //!   if it now overlaps deeper than d_tol, its active covers are the faces of the
 //!   entrance block attaining d_RE2 without the distance filter, whose d_n is minus the
-//!   overlap (see [`deep_covers`]); otherwise a cover closed then stays active while its
+//!   overlap (see [`deep_covers`]), and during the open-close iteration the spring
+//!   follows the face that is deepest at the trial positions ([`follow_deepest`]);
+//!   otherwise a cover closed then stays active while its
 //!   vertex is behind its edge's line, moved to the adjacent edge when the vertex
 //!   slides past an end of its edge and that edge's line is nearer. Found by the
 //!   hard-pair property tests: a 3 deg wedge at 1 m/s with p = 1e6 and d_tol = 1.2 mm
@@ -46,12 +48,12 @@
 //!   block its edge was pressed against. The type-based detectors keep the paper's
 //!   behaviour.
 
-use crate::contact::{Contact, ContactKey};
+use crate::contact::{Contact, ContactKey, ContactSet};
 use crate::detector::{ContactDetector, DetectionParams};
 use crate::neighbour::NeighbourPair;
 use crate::shape::BlockShape;
 use crate::tracking;
-use dda_geom::{DVec2, VertexEdge};
+use dda_geom::{DVec2, Motion, VertexEdge};
 
 /// The cover-based detector, CB-CD.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -209,21 +211,23 @@ fn overlap_deeper(a: &BlockShape, b: &BlockShape, d: f64) -> bool {
 /// The covers of a pair of blocks that were in closed contact at the end of the previous
 /// step and now overlap deeper than d_tol, where the distance filter (eq. 10) would drop
 /// the covers that matter: the pair's candidates (`list[start..]`) take their activity
-/// from the whole cover list without the distance filter, whose active covers are added.
-/// Returns false, changing nothing, if the overlap is not deeper than d_tol.
+/// from the whole cover list without the distance filter, whose active covers are added,
+/// and so are its covers within d_tol of their edge's line, inactive, which may become
+/// the deepest face during the step ([`follow_deepest`]). Returns false, changing
+/// nothing, if the overlap is not deeper than d_tol.
 ///
 /// Our choice (the paper assumes penetrations below d_tol, section 2.6, which a penalty
 /// too soft for d_tol breaks). The active covers are then faces of the entrance block
 /// attaining d_RE2 (eq. 11) over the whole list, whose d_n is minus the overlap (the
 /// least translation that separates the blocks): the face rule of eq. 11 without the
 /// distance filter, and without quasi-parallel companions. A spring on such a face
-/// measures the overlap itself, a continuous function of the positions (where the deepest face changes, the
-/// two faces' d_n are equal), so the springs store p d^2 / 2 of the overlap d and the
-/// energy bounds it. No spring starts this deep beside those closed at the end of the
+/// measures the overlap itself, a continuous function of the positions (where the
+/// deepest face changes, the two faces' d_n are equal), so the springs store p d^2 / 2 of
+/// the overlap d and the energy bounds it. No spring starts this deep beside those closed at the end of the
 /// previous step (`before`): one would store energy from nowhere (found by the tests: a
 /// plate's end turning parallel to the face it was pressed 19 mm into gained a second
-/// spring and 30% of the energy). Keeping the contacts closed last step instead (found by the
-/// hard-pair property tests) left a spinning wedge's tip to sweep into the block its edge
+/// spring and 30% of the energy). Keeping the contacts closed last step instead (found by
+/// the hard-pair property tests) left a spinning wedge's tip to sweep into the block its edge
 /// was pressed against, with no candidate listed for the tip.
 pub(crate) fn deep_covers(
     a: &BlockShape,
@@ -265,12 +269,107 @@ pub(crate) fn deep_covers(
     for c in list[start..].iter_mut() {
         c.active = all.iter().any(|m| m.active && m.key == c.key);
     }
-    for m in all.iter().filter(|m| m.active) {
+    // Listed too, inactive: the covers that may become the deepest face during the step
+    // (see [`follow_deepest`]); a vertex more than d_tol outside an edge's line cannot.
+    for m in all.iter().filter(|m| m.active || m.d_n < params.d_tol) {
         if !list[start..].iter().any(|c| c.key == m.key) {
             list.push(*m);
         }
     }
     true
+}
+
+/// Open-close iteration of the deep pairs of [`deep_covers`]: the spring follows the
+/// entrance block's face that attains d_RE2 at the trial positions (block i moved by
+/// `trial[i]`). Where the face closed in a deep pair no longer attains it in the trial,
+/// the contact moves to the attaining face (the first by key; with its trial r in
+/// [0, 1]) with the same state, and the OCI goes on. Returns how many pairs moved.
+///
+/// Our choice, completing the deep rule: the spring measures the overlap, p d^2 / 2, only
+/// if it sits on the face that is deepest where the step ends. Left on the face deepest at
+/// step start while a turning block brings another vertex deeper (a wedge's base rocking
+/// on a plate), the step ends with more overlap than its spring saw, and the difference,
+/// p d Delta per switch, came back as kinetic energy: 14% of it in the hard-pair sample
+/// that found it. Contacts open at step start (d_n > 0) are left to trajectory tracking.
+pub(crate) fn follow_deepest(
+    shapes: &[BlockShape],
+    trial: &[Motion],
+    set: &mut ContactSet,
+) -> usize {
+    let mut moved = 0;
+    for pk in 0..set.pairs.len() {
+        let pc = set.pairs[pk];
+        if !pc.deep {
+            continue;
+        }
+        let range = pc.start as usize..pc.end as usize;
+        // The trial measure of each candidate, and whether it is a face of the entrance
+        // block there (`is_face` at the trial positions).
+        let measure = |c: &Contact| {
+            let k = c.key;
+            let (vs, es) = (
+                &shapes[k.vertex_block as usize],
+                &shapes[k.edge_block as usize],
+            );
+            let (mv, me) = (
+                &trial[k.vertex_block as usize],
+                &trial[k.edge_block as usize],
+            );
+            let i = k.vertex as usize;
+            let j = k.edge as usize;
+            let a = mv.apply(vs.vertices[i]);
+            let (b0, b1) = (me.apply(es.vertices[j]), me.apply(es.vertices[es.next(j)]));
+            let e = b1 - b0;
+            let n = DVec2::new(e.y, -e.x);
+            let face = (mv.apply(vs.vertices[vs.prev(i)]) - a).dot(n) >= 0.0
+                && (mv.apply(vs.vertices[vs.next(i)]) - a).dot(n) >= 0.0;
+            (VertexEdge::new(a, b0, b1), face)
+        };
+        let mut d_re2 = f64::NEG_INFINITY;
+        for c in &set.contacts[range.clone()] {
+            let (m, face) = measure(c);
+            if face {
+                d_re2 = d_re2.max(m.d_n);
+            }
+        }
+        // Separated in the trial (the springs open by themselves), or no face listed.
+        if d_re2 >= 0.0 || d_re2 == f64::NEG_INFINITY {
+            continue;
+        }
+        let tie = d_re2 - 1e-9 * d_re2.abs();
+        let attains = |c: &Contact| {
+            let (m, face) = measure(c);
+            face && m.d_n >= tie && (0.0..=1.0).contains(&m.r)
+        };
+        let held = |c: &Contact| c.active && c.state.is_closed() && c.d_n <= 0.0;
+        let contacts = &mut set.contacts[range];
+        let Some(old) = contacts.iter().find(|c| held(c)).copied() else {
+            continue;
+        };
+        if contacts.iter().any(|c| held(c) && attains(c)) {
+            continue;
+        }
+        // Moves only to a face less deep at step start than the one left (ties by key):
+        // every move goes up that order, so the iteration cannot cycle between two
+        // vertices of a face turning through parallel, where each spring tips the other
+        // vertex deeper; it stays on the last one, which started less deep.
+        let later = |c: &Contact| (c.d_n, c.key) > (old.d_n, old.key);
+        let Some(new) = contacts.iter().position(|c| later(c) && attains(c)) else {
+            continue;
+        };
+        for c in contacts.iter_mut().filter(|c| held(c)) {
+            c.active = false;
+        }
+        let r = measure(&contacts[new]).0.r;
+        let c = &mut contacts[new];
+        c.active = true;
+        c.state = old.state;
+        c.locked_r = r.clamp(0.0, 1.0);
+        c.slide_dir = 0.0;
+        c.normal_force = old.normal_force;
+        moved += 1;
+    }
+    moved
 }
 
 impl CoverDetector {
@@ -432,6 +531,7 @@ mod tests {
                     pair: IDS,
                     start: 0,
                     end: before.len() as u32,
+                    deep: false,
                 }],
                 contacts: before,
             };
@@ -451,6 +551,64 @@ mod tests {
         let mut apart = closed(2);
         apart.state = crate::ContactState::Open;
         assert_eq!(detect_after(vec![apart]).active().count(), 0);
+    }
+
+    #[test]
+    fn a_deep_spring_follows_the_vertex_that_turns_deepest() {
+        // A's base, tilted 0.02 over its 1 m, was closed 0.2 deep in B's top edge (edge 2)
+        // at its lower vertex 0; d_tol = 0.1, so the pair is deep and that vertex's face
+        // carries the only spring.
+        let a = shape(&[[1.0, 0.8], [2.0, 0.82], [2.0, 1.8], [1.0, 1.8]]);
+        let b = shape(&[[0.0, 0.0], [3.0, 0.0], [3.0, 1.0], [0.0, 1.0]]);
+        let shapes = [a, b];
+        let key = |vertex| ContactKey {
+            vertex_block: 0,
+            vertex,
+            edge_block: 1,
+            edge: 2,
+        };
+        let mut closed = Contact::new(key(0), -0.2, 2.0 / 3.0, true);
+        closed.state = crate::ContactState::Sliding;
+        let previous = ContactSet {
+            pairs: vec![crate::contact::PairContacts {
+                pair: IDS,
+                start: 0,
+                end: 1,
+                deep: false,
+            }],
+            contacts: vec![closed],
+        };
+        let set = detect_pair_set(&shapes, &previous);
+        assert!(set.pairs[0].deep);
+        assert_eq!(keys(&set.contacts, true), vec![tuple(key(0))]);
+        let turn = |phi: f64| {
+            [
+                dda_geom::Motion::new(shapes[0].centroid, &[0.0, 0.0, phi, 0.0, 0.0, 0.0]),
+                dda_geom::Motion::new(shapes[1].centroid, &[0.0; 6]),
+            ]
+        };
+        // Turned 0.04 rad clockwise, vertex 1 ends 0.02 lower than vertex 0: the spring
+        // moves to it, sliding as before, and the iteration must go on.
+        let mut moved = set.clone();
+        assert_eq!(track(&CoverDetector, &shapes, &turn(-0.04), &mut moved), 1);
+        assert_eq!(keys(&moved.contacts, true), vec![tuple(key(1))]);
+        let now = moved.find(&key(1)).expect("listed");
+        assert_eq!(now.state, crate::ContactState::Sliding);
+        // Turned back, vertex 0 is deepest again, but it started deeper than vertex 1:
+        // no move back, so the iteration cannot cycle.
+        let mut back = moved.clone();
+        assert_eq!(track(&CoverDetector, &shapes, &turn(0.04), &mut back), 0);
+        assert_eq!(keys(&back.contacts, true), vec![tuple(key(1))]);
+        // Without the turn, vertex 0 stays deepest: nothing moves.
+        let mut still = set.clone();
+        assert_eq!(track(&CoverDetector, &shapes, &turn(0.0), &mut still), 0);
+        // Lifted clear of B in the trial: the springs open by themselves, nothing moves.
+        let lift = [
+            dda_geom::Motion::new(shapes[0].centroid, &[0.0, 0.5, -0.04, 0.0, 0.0, 0.0]),
+            dda_geom::Motion::new(shapes[1].centroid, &[0.0; 6]),
+        ];
+        let mut lifted = set.clone();
+        assert_eq!(track(&CoverDetector, &shapes, &lift, &mut lifted), 0);
     }
 
     #[test]

@@ -154,9 +154,11 @@ fn detect_range(
             Some(p) if p.pair == pair => previous.of_pair(prev_k),
             _ => &[],
         };
+        let mut deep = false;
         if detector.keeps_closed_contacts()
             && before.iter().any(|c| c.active && c.state.is_closed())
-            && !crate::cover::deep_covers(
+        {
+            deep = crate::cover::deep_covers(
                 &shapes[pair.a as usize],
                 &shapes[pair.b as usize],
                 pair,
@@ -164,9 +166,10 @@ fn detect_range(
                 before,
                 start,
                 list,
-            )
-        {
-            keep_closed(shapes, before, start, list);
+            );
+            if !deep {
+                keep_closed(shapes, before, start, list);
+            }
         }
         if list.len() == start {
             continue;
@@ -195,6 +198,7 @@ fn detect_range(
             pair,
             start: start as u32,
             end: list.len() as u32,
+            deep,
         });
     }
 }
@@ -289,9 +293,9 @@ pub fn detect(
             let base = out.contacts.len() as u32;
             out.contacts.extend_from_slice(&list);
             out.pairs.extend(ranges.into_iter().map(|r| PairContacts {
-                pair: r.pair,
                 start: r.start + base,
                 end: r.end + base,
+                ..r
             }));
         }
         return;
@@ -354,6 +358,9 @@ pub fn track(
             c.locked_r = (c.r + t * (trial_m.r - c.r)).clamp(0.0, 1.0);
             changed += 1;
         }
+    }
+    if detector.keeps_closed_contacts() {
+        changed += crate::cover::follow_deepest(shapes, trial, set);
     }
     changed
 }

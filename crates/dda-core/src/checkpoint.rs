@@ -21,8 +21,9 @@ use std::path::{Path, PathBuf};
 /// The first eight bytes of every checkpoint file.
 pub const CHECKPOINT_MAGIC: [u8; 8] = *b"DDA-CKPT";
 
-/// The format version written; files of another version are refused.
-pub const CHECKPOINT_VERSION: u32 = 1;
+/// The format version written; files of another version are refused. Version 2: the
+/// contacts' pairs carry the cover detector's deep flag.
+pub const CHECKPOINT_VERSION: u32 = 2;
 
 /// Length of the header before the payload.
 const HEADER_LEN: usize = 24;
