@@ -39,9 +39,9 @@
 //!   entrance block attaining d_RE2 without the distance filter, whose d_n is minus the
 //!   overlap (see [`deep_covers`]), and during the open-close iteration the spring
 //!   follows the face that is deepest at the trial positions ([`follow_deepest`]);
-//!   otherwise a cover closed then stays active while its
-//!   vertex is behind its edge's line, moved to the adjacent edge when the vertex
-//!   slides past an end of its edge and that edge's line is nearer. Found by the
+//!   otherwise a cover closed then stays active while its vertex is behind its edge's
+//!   line, moved to the adjacent edge when the vertex slides past an end of its edge
+//!   and that edge's line is nearer. Found by the
 //!   hard-pair property tests: a 3 deg wedge at 1 m/s with p = 1e6 and d_tol = 1.2 mm
 //!   went through a 15 deg wedge; a chamfered square's corner slid 13 mm deep past the
 //!   end of the edge it entered and went through; a spinning wedge's tip swept into the
@@ -223,12 +223,13 @@ fn overlap_deeper(a: &BlockShape, b: &BlockShape, d: f64) -> bool {
 /// distance filter, and without quasi-parallel companions. A spring on such a face
 /// measures the overlap itself, a continuous function of the positions (where the
 /// deepest face changes, the two faces' d_n are equal), so the springs store p d^2 / 2 of
-/// the overlap d and the energy bounds it. No spring starts this deep beside those closed at the end of the
-/// previous step (`before`): one would store energy from nowhere (found by the tests: a
-/// plate's end turning parallel to the face it was pressed 19 mm into gained a second
-/// spring and 30% of the energy). Keeping the contacts closed last step instead (found by
-/// the hard-pair property tests) left a spinning wedge's tip to sweep into the block its edge
-/// was pressed against, with no candidate listed for the tip.
+/// the overlap d and the energy bounds it. No spring starts this deep beside those
+/// closed at the end of the previous step (`before`): one would store energy from nowhere
+/// (found by the tests: a plate's end turning parallel to the face it was pressed 19 mm
+/// into gained a second spring and 30% of the energy). Keeping the contacts closed last
+/// step instead (found by the hard-pair property tests) left a spinning wedge's tip to
+/// sweep into the block its edge was pressed against, with no candidate listed for the
+/// tip.
 pub(crate) fn deep_covers(
     a: &BlockShape,
     b: &BlockShape,
