@@ -307,19 +307,12 @@ pub(crate) fn follow_deepest(
         // The trial measure of each candidate, and whether it is a face of the entrance
         // block there (`is_face` at the trial positions).
         let measure = |c: &Contact| {
-            let k = c.key;
-            let (vs, es) = (
-                &shapes[k.vertex_block as usize],
-                &shapes[k.edge_block as usize],
+            let (a, b0, b1) = crate::detector::trial_points(shapes, trial, c.key);
+            let (vs, mv) = (
+                &shapes[c.key.vertex_block as usize],
+                &trial[c.key.vertex_block as usize],
             );
-            let (mv, me) = (
-                &trial[k.vertex_block as usize],
-                &trial[k.edge_block as usize],
-            );
-            let i = k.vertex as usize;
-            let j = k.edge as usize;
-            let a = mv.apply(vs.vertices[i]);
-            let (b0, b1) = (me.apply(es.vertices[j]), me.apply(es.vertices[es.next(j)]));
+            let i = c.key.vertex as usize;
             let e = b1 - b0;
             let n = DVec2::new(e.y, -e.x);
             let face = (mv.apply(vs.vertices[vs.prev(i)]) - a).dot(n) >= 0.0

@@ -312,6 +312,30 @@ pub fn detect(
     );
 }
 
+/// The vertex and the edge's two ends of contact `key` at the trial positions (block i
+/// moved by `trial[i]`).
+#[inline]
+pub(crate) fn trial_points(
+    shapes: &[BlockShape],
+    trial: &[Motion],
+    key: ContactKey,
+) -> (DVec2, DVec2, DVec2) {
+    let (vs, es) = (
+        &shapes[key.vertex_block as usize],
+        &shapes[key.edge_block as usize],
+    );
+    let (mv, me) = (
+        &trial[key.vertex_block as usize],
+        &trial[key.edge_block as usize],
+    );
+    let j = key.edge as usize;
+    (
+        mv.apply(vs.vertices[key.vertex as usize]),
+        me.apply(es.vertices[j]),
+        me.apply(es.vertices[es.next(j)]),
+    )
+}
+
 /// Open-close iteration update of activity: every inactive candidate is measured at the
 /// trial positions (block i moved by `trial[i]`, its motion about its centroid, rotation
 /// exact) and activated, closed and locked where its trajectory
@@ -325,25 +349,10 @@ pub fn track(
     if !detector.tracks_trajectories() {
         return 0;
     }
-    let moved = |block: u32, p: DVec2| trial[block as usize].apply(p);
     let mut changed = 0;
     // The trigger: outside the edge's line at step start (d_n0 > 0).
     for c in set.contacts.iter_mut().filter(|c| !c.active && c.d_n > 0.0) {
-        let k = c.key;
-        let (vs, es) = (
-            &shapes[k.vertex_block as usize],
-            &shapes[k.edge_block as usize],
-        );
-        let a = vs.vertices[k.vertex as usize];
-        let (b0, b1) = (
-            es.vertices[k.edge as usize],
-            es.vertices[es.next(k.edge as usize)],
-        );
-        let (a1, b0, b1) = (
-            moved(k.vertex_block, a),
-            moved(k.edge_block, b0),
-            moved(k.edge_block, b1),
-        );
+        let (a1, b0, b1) = trial_points(shapes, trial, c.key);
         // The trigger: behind the edge's line in the trial (the sign of d_n1).
         let (e, w) = (b1 - b0, a1 - b0);
         if w.x * e.y - w.y * e.x >= 0.0 {
