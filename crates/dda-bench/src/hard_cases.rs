@@ -9,7 +9,10 @@
 //! - 4.1 sharp corners: two isosceles triangles with 11.4 deg tips (base 0.2 m, height
 //!   1 m), B's tip up, A's tip down, turned 10 deg clockwise, 0.01 m right of and 0.05 m
 //!   above B's tip: the two sharp corners meet within d_tol, A's tip strikes B's right
-//!   face just below B's tip and A glances off to the right. A at 1 m/s in -y; 0.5 s.
+//!   face just below B's tip and A glances off to the right. A at 1 m/s in -y; 2 s, so
+//!   that the run ends with A leaving: the first glance turns A's path only to 0.024 m/s
+//!   right against B's flank widening at 0.1 m per m, and A's tip strikes the flank
+//!   again near t = 1.2 s before it passes B's base.
 //! - 4.2 short edges: two regular 18-gons with 0.35 m edges, A 0.1 m above B and 0.4 m to
 //!   the right (an oblique hit). A at 5 m/s in -y; 0.3 s.
 //! - 4.3 flat polygons: two 1 m x 0.1 m plates whose four corners are chamfered into
@@ -61,7 +64,7 @@ pub const HARD_CASES: [HardCase; 7] = [
         time_step: 0.01,
         penalty: 3e10,
         speed: 1.0,
-        duration: 0.5,
+        duration: 2.0,
         geometry: sharp_corners,
     },
     HardCase {

@@ -30,7 +30,7 @@
 use crate::effects::Effects;
 use crate::kinematics::{Mat6, Vec6, along, elasticity, mass_matrix, point_displacement};
 use crate::scene::{JointProps, Mode, Model};
-use crate::springs::{Row, contact_length, contact_points, normal_row, shear_row};
+use crate::springs::{HalfStep, Row, contact_length, contact_points, normal_row, shear_row};
 use crate::system::{BlockSystem, Entry, RankOne, SolveError};
 use dda_contact::{
     BlockShape, ContactDetector, ContactSet, ContactState, DetectionParams, NeighbourPair,
@@ -326,6 +326,9 @@ pub struct Simulation {
     /// The system's pattern: the needed pairs when it was last set, widened.
     pattern: Vec<(u32, u32)>,
     pair_entry: Vec<Option<Entry>>,
+    /// Each block's half step, where the attempt's contact rows are linearised.
+    half: Vec<HalfStep>,
+    /// Each contact's normal row for the attempt.
     rows: Vec<Row>,
     springs: Vec<Spring>,
     /// Friction forces in effect: contact, magnitude, row.
@@ -424,6 +427,7 @@ impl Simulation {
             block_pairs: Vec::new(),
             pattern: Vec::new(),
             pair_entry: Vec::new(),
+            half: Vec::with_capacity(n),
             rows: Vec::new(),
             springs: Vec::new(),
             forces: Vec::new(),
@@ -661,11 +665,6 @@ impl Simulation {
         let t_pat = Instant::now();
         self.set_pattern()?;
         rec.assembly_s += t_pat.elapsed().as_secs_f64();
-        // Normal rows depend only on step-start geometry: compute once per step.
-        self.rows.clear();
-        for c in &self.contacts.contacts {
-            self.rows.push(normal_row(c, &self.shapes));
-        }
         self.saved.clone_from(&self.contacts.contacts);
         let p = &self.model.params;
         let (duration, d_max, theta_max, max_oci, dt0) =
@@ -680,6 +679,7 @@ impl Simulation {
         loop {
             *last_dt = dt;
             let t_asm = Instant::now();
+            self.linearise(dt);
             self.base_terms(dt);
             rec.assembly_s += t_asm.elapsed().as_secs_f64();
             if first_attempt {
@@ -861,6 +861,22 @@ impl Simulation {
             .joint_between(key.vertex_block as usize, key.edge_block as usize)
     }
 
+    /// Sets the half step of every block for an attempt of size `dt` and the contacts'
+    /// normal rows, linearised there (see `springs`).
+    fn linearise(&mut self, dt: f64) {
+        self.half.clear();
+        for (i, s) in self.shapes.iter().enumerate() {
+            self.half.push(match self.free[i] {
+                Some(_) => HalfStep::new(s.centroid, &self.blocks[i].velocity, dt),
+                None => HalfStep::at_rest(s.centroid),
+            });
+        }
+        self.rows.clear();
+        for c in &self.contacts.contacts {
+            self.rows.push(normal_row(c, &self.shapes, &self.half));
+        }
+    }
+
     /// Collects the springs and friction forces of the current contact states: the active
     /// closed contacts' normal springs, and, where the joint has shear, locked contacts'
     /// shear springs and sliding contacts' friction forces.
@@ -890,7 +906,7 @@ impl Simulation {
                 }
                 match c.state {
                     ContactState::Locked => {
-                        let row = shear_row(&c, &self.shapes, c.locked_r);
+                        let row = shear_row(&c, &self.shapes, &self.half, c.locked_r);
                         self.springs.push(Spring {
                             contact,
                             shear: true,
@@ -904,7 +920,7 @@ impl Simulation {
                         if c.bonded {
                             limit += j.cohesion * contact_length(&c, &self.shapes);
                         }
-                        let row = shear_row(&c, &self.shapes, c.r.clamp(0.0, 1.0));
+                        let row = shear_row(&c, &self.shapes, &self.half, c.r.clamp(0.0, 1.0));
                         self.forces.push((contact, -c.slide_dir * limit, row));
                     }
                     _ => {}
@@ -1228,7 +1244,8 @@ impl Simulation {
                         n.normal_force = -pn * d;
                         if j.has_shear() {
                             if c.state == ContactState::Locked {
-                                let s = shear_row(&c, &self.shapes, c.locked_r).eval(&self.d);
+                                let s = shear_row(&c, &self.shapes, &self.half, c.locked_r)
+                                    .eval(&self.d);
                                 let mut limit = n.normal_force.max(0.0) * j.tan_phi;
                                 if c.bonded {
                                     limit += j.cohesion * length;
@@ -1240,7 +1257,8 @@ impl Simulation {
                                 }
                             } else {
                                 let s =
-                                    shear_row(&c, &self.shapes, c.r.clamp(0.0, 1.0)).eval(&self.d);
+                                    shear_row(&c, &self.shapes, &self.half, c.r.clamp(0.0, 1.0))
+                                        .eval(&self.d);
                                 if c.slide_dir == 0.0 {
                                     n.slide_dir = s.signum();
                                 } else if s * c.slide_dir < 0.0 {
