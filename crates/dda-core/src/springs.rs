@@ -7,7 +7,8 @@
 //! spring, the friction force and the fixed-point springs are all this one mechanism.
 //!
 //! **Where a contact row is linearised** (our choice; DESIGN 3 takes the gradient at step
-//! start). g0 is the exact value at step start; the coefficients c are the gradient at
+//! start). g0 is the value at step start (the normal row divides it by the edge's length
+//! at the half step, see [`normal_row`]); the coefficients c are the gradient at
 //! the step's predicted midpoint: both blocks moved by half their motion at their current
 //! velocities, V dt / 2 ([`HalfStep`]). Then c . D equals q(D) - q(0) up to terms of third
 //! order when the step moves as predicted (the midpoint rule is exact for quadratics), so
@@ -95,11 +96,11 @@ pub fn contact_points(c: &Contact, shapes: &[BlockShape]) -> (DVec2, DVec2, DVec
     )
 }
 
-/// The contact's points at the half step (`half`, by block): vertex, edge start, edge
-/// end, and the vertex block's and edge block's reference points.
+/// The contact's step-start points `p` (vertex, edge start, edge end) moved to the half
+/// step (`half`, by block), with the vertex block's and edge block's reference points.
 #[inline]
-fn points_at(c: &Contact, shapes: &[BlockShape], half: &[HalfStep]) -> ([DVec2; 3], [DVec2; 2]) {
-    let (p1, p2, p3) = contact_points(c, shapes);
+fn points_at(c: &Contact, p: (DVec2, DVec2, DVec2), half: &[HalfStep]) -> ([DVec2; 3], [DVec2; 2]) {
+    let (p1, p2, p3) = p;
     let (hv, he) = (
         &half[c.key.vertex_block as usize],
         &half[c.key.edge_block as usize],
@@ -112,13 +113,16 @@ fn points_at(c: &Contact, shapes: &[BlockShape], half: &[HalfStep]) -> ([DVec2; 
 
 /// The normal distance of a vertex-edge contact after the step, to first order:
 /// d = (S0 + H^T D_i + G^T D_j) / l with S0 = `det[[1,x1,y1],[1,x3,y3],[1,x2,y2]]`
-/// (DESIGN 3; S0 / l is the paper's d_n, eq. 7), H and G taken at the half step `half`
-/// (see the module docs). Its translational parts are equal and opposite, so the spring
+/// (DESIGN 3; S0 / l is the paper's d_n, eq. 7), H, G and l taken at the half step
+/// `half` (see the module docs). S0 is the step start's; l at the half step equals l at
+/// step start for a rigid motion, and differs by the edge's strain over half a step for a
+/// straining block. Its translational parts are equal and opposite, so the spring
 /// conserves momentum.
 pub fn normal_row(c: &Contact, shapes: &[BlockShape], half: &[HalfStep]) -> Row {
-    let (p1, p2, p3) = contact_points(c, shapes);
+    let start = contact_points(c, shapes);
+    let (p1, p2, p3) = start;
     let s0 = (p3.x - p1.x) * (p2.y - p1.y) - (p2.x - p1.x) * (p3.y - p1.y);
-    let ([p1, p2, p3], [ci, cj]) = points_at(c, shapes, half);
+    let ([p1, p2, p3], [ci, cj]) = points_at(c, start, half);
     let l = (p3 - p2).length();
     let ti = t_rows(p1, ci);
     let (t2, t3) = (t_rows(p2, cj), t_rows(p3, cj));
@@ -142,10 +146,11 @@ pub fn normal_row(c: &Contact, shapes: &[BlockShape], half: &[HalfStep]) -> Row 
 /// tangent: the shear spring's and the friction force's row. Its value is taken at step
 /// start, its gradient at the half step `half`, as the normal row's.
 pub fn shear_row(c: &Contact, shapes: &[BlockShape], half: &[HalfStep], anchor: f64) -> Row {
-    let (p1, p2, p3) = contact_points(c, shapes);
+    let start = contact_points(c, shapes);
+    let (p1, p2, p3) = start;
     let t = (p3 - p2).normalize();
     let g0 = (p1 - (p2 + anchor * (p3 - p2))).dot(t);
-    let ([p1, p2, p3], [ci, cj]) = points_at(c, shapes, half);
+    let ([p1, p2, p3], [ci, cj]) = points_at(c, start, half);
     let t = (p3 - p2).normalize();
     let p0 = p2 + anchor * (p3 - p2);
     let mut cb = along(t, p0, cj);
