@@ -2,7 +2,8 @@
 //! joint layout of paper 5.2b over a region `s` times as wide and as tall (about
 //! 826 s^2 blocks of the same sizes, Table 3's 5.2b parameters), run with the cover
 //! detector at r_tol 1 for a short simulated time. Writes `docs/scaling.md` and
-//! `docs/scaling.svg` (or under `--out DIR`).
+//! `docs/scaling.svg` (or under `--out DIR`); the readings written by hand under the
+//! table of an existing `scaling.md` (its `## ` sections) are kept.
 
 use dda::bench::{PAPER_COLUMNS, column_scene};
 use dda::core::{RunOptions, Simulation};
@@ -187,7 +188,29 @@ pub fn run(o: &Options) -> Result<(), String> {
     std::fs::write(o.out.join("scaling.svg"), svg).map_err(|e| format!("scaling.svg: {e}"))?;
     doc.push_str("\n![time per step](scaling.svg)\n");
     let path = o.out.join("scaling.md");
+    // The readings written by hand under the table (its `## ` sections) are kept.
+    if let Ok(old) = std::fs::read_to_string(&path) {
+        doc.push_str(hand_written(&old));
+    }
     std::fs::write(&path, doc).map_err(|e| format!("{}: {e}", path.display()))?;
     println!("wrote {}", path.display());
     Ok(())
+}
+
+/// The hand-written part of a scaling report: from its first `## ` section on (the
+/// generated part has none), with the blank line before it; empty if there is none.
+fn hand_written(doc: &str) -> &str {
+    doc.find("\n## ").map_or("", |at| &doc[at..])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::hand_written;
+
+    #[test]
+    fn regenerating_keeps_the_readings_written_by_hand() {
+        let old = "# Time per step\n\n| table |\n\n![plot](scaling.svg)\n\n## Reading\n\nText.\n";
+        assert_eq!(hand_written(old), "\n## Reading\n\nText.\n");
+        assert_eq!(hand_written("# Time per step\n\n| table |\n"), "");
+    }
 }
