@@ -4,8 +4,13 @@
 //! detector at r_tol 1 for a short simulated time. Writes `docs/scaling.md` and
 //! `docs/scaling.svg` (or under `--out DIR`); the readings written by hand under the
 //! table of an existing `scaling.md` (its `## ` sections) are kept.
+//!
+//! With `--write-scenes DIR` it runs nothing and writes each column as a scene file
+//! (`DIR/column-N.json`) instead, for `dda run` with `--checkpoint-every`: a column too
+//! large to run in one sitting can then be resumed (`dda resume`).
 
 use dda::bench::{PAPER_COLUMNS, column_scene};
+use dda::core::scene::Scene;
 use dda::core::{RunOptions, Simulation};
 use dda::report::plot;
 use std::fmt::Write as _;
@@ -21,14 +26,17 @@ pub struct Options {
     duration: f64,
     /// Where to write scaling.md and scaling.svg.
     out: PathBuf,
+    /// Write the columns as scene files here instead of running them.
+    write_scenes: Option<PathBuf>,
 }
 
-/// Parses `--blocks 826,10000,100000 --duration 0.1 --out DIR`.
+/// Parses `--blocks 826,10000,100000 --duration 0.1 --out DIR [--write-scenes DIR]`.
 pub fn parse(args: &[String], root: &Path) -> Result<Options, String> {
     let mut o = Options {
         blocks: vec![826, 3300, 10_000, 30_000, 100_000],
         duration: 0.1,
         out: root.join("docs"),
+        write_scenes: None,
     };
     let mut it = args.iter();
     while let Some(flag) = it.next() {
@@ -52,6 +60,7 @@ pub fn parse(args: &[String], root: &Path) -> Result<Options, String> {
                     .ok_or_else(|| format!("--duration {value}: not a positive number"))?;
             }
             "--out" => o.out = PathBuf::from(value),
+            "--write-scenes" => o.write_scenes = Some(PathBuf::from(value)),
             other => return Err(format!("unknown option {other}")),
         }
     }
@@ -72,27 +81,49 @@ struct Row {
     error: Option<String>,
 }
 
-/// Runs the study.
-pub fn run(o: &Options) -> Result<(), String> {
-    std::fs::create_dir_all(&o.out).map_err(|e| format!("{}: {e}", o.out.display()))?;
+/// The generated column of about `n` blocks, `duration` simulated seconds, no frames.
+fn scaled_column(n: usize, duration: f64) -> (usize, Scene) {
     let column = PAPER_COLUMNS[3];
+    let scale = (n as f64 / column.blocks as f64).sqrt();
+    let blocks = column.scaled_blocks(scale);
+    let mut analysis = column.analysis();
+    analysis.duration = duration;
+    analysis.frames = 0;
+    let name = format!("column-{}", blocks.len());
+    (blocks.len(), column_scene(&name, &blocks, analysis))
+}
+
+/// Writes each column as `dir/column-N.json` (N its block count).
+fn write_scenes(o: &Options, dir: &Path) -> Result<(), String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    for &n in &o.blocks {
+        let (count, scene) = scaled_column(n, o.duration);
+        let path = dir.join(format!("column-{count}.json"));
+        let text = serde_json::to_string(&scene).map_err(|e| format!("{count} blocks: {e}"))?;
+        std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+        eprintln!("scaling: wrote {} ({count} blocks)", path.display());
+    }
+    Ok(())
+}
+
+/// Runs the study (or writes its scenes, with `--write-scenes`).
+pub fn run(o: &Options) -> Result<(), String> {
+    if let Some(dir) = &o.write_scenes {
+        return write_scenes(o, dir);
+    }
+    std::fs::create_dir_all(&o.out).map_err(|e| format!("{}: {e}", o.out.display()))?;
     let mut rows = Vec::new();
     for &n in &o.blocks {
-        let scale = (n as f64 / column.blocks as f64).sqrt();
         let t0 = Instant::now();
-        let blocks = column.scaled_blocks(scale);
-        let mut analysis = column.analysis();
-        analysis.duration = o.duration;
-        analysis.frames = 0;
-        let scene = column_scene(&format!("column-{}", blocks.len()), &blocks, analysis);
+        let (count, scene) = scaled_column(n, o.duration);
         let model = scene
             .validate()
-            .map_err(|e| format!("{} blocks: {}: {}", blocks.len(), e.key, e.message))?;
+            .map_err(|e| format!("{count} blocks: {}: {}", e.key, e.message))?;
         let mut sim = Simulation::new(model, RunOptions::default());
         let build_s = t0.elapsed().as_secs_f64();
         eprintln!(
             "scaling: {} blocks ({} unknowns), built in {build_s:.1} s",
-            blocks.len(),
+            count,
             sim.unknowns()
         );
         let result = sim.run(|s, _| {
@@ -108,7 +139,7 @@ pub fn run(o: &Options) -> Result<(), String> {
         });
         let t = sim.totals();
         rows.push(Row {
-            blocks: blocks.len(),
+            blocks: count,
             unknowns: sim.unknowns(),
             build_s,
             steps: t.steps,
@@ -205,7 +236,31 @@ fn hand_written(doc: &str) -> &str {
 
 #[cfg(test)]
 mod tests {
-    use super::hand_written;
+    use super::{Options, hand_written, scaled_column, write_scenes};
+    use dda::core::scene::Scene;
+    use std::path::PathBuf;
+
+    /// A column written with `--write-scenes` loads back as the same scene, under the
+    /// name that carries its block count.
+    #[test]
+    fn written_columns_load_back_unchanged() {
+        let dir = std::env::temp_dir().join(format!("dda-write-scenes-{}", std::process::id()));
+        let o = Options {
+            blocks: vec![826],
+            duration: 0.05,
+            out: PathBuf::from("unused"),
+            write_scenes: Some(dir.clone()),
+        };
+        write_scenes(&o, &dir).expect("written");
+        let (count, scene) = scaled_column(826, 0.05);
+        let (loaded, model) =
+            Scene::load(&dir.join(format!("column-{count}.json"))).expect("loads");
+        std::fs::remove_dir_all(&dir).ok();
+        assert_eq!(loaded, scene);
+        // The generated blocks and the fixed base.
+        assert_eq!(model.blocks.len(), count + 1);
+        assert_eq!(model.params.duration, 0.05);
+    }
 
     #[test]
     fn regenerating_keeps_the_readings_written_by_hand() {

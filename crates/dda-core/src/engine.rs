@@ -307,6 +307,9 @@ pub struct Simulation {
     shapes: Vec<BlockShape>,
     /// Free-block index of each block (None: fixed).
     free: Vec<Option<u32>>,
+    /// Material of each block, packed: the joint lookups of every contact in every OCI
+    /// iteration read it (the model's blocks are large records, mostly cache misses).
+    material: Vec<u32>,
     /// Block index of each free block: the inverse of `free`.
     free_blocks: Vec<u32>,
     n_free: usize,
@@ -400,6 +403,7 @@ impl Simulation {
             })
             .collect();
         let shapes = blocks.iter().map(|b| BlockShape::new(&b.polygon)).collect();
+        let material = model.blocks.iter().map(|b| b.material as u32).collect();
         let n = blocks.len();
         Simulation {
             dt: p.dt0,
@@ -414,6 +418,7 @@ impl Simulation {
             free_blocks: (0..free.len() as u32)
                 .filter(|&i| free[i as usize].is_some())
                 .collect(),
+            material,
             free,
             n_free: n_free as usize,
             t: 0.0,
@@ -764,10 +769,9 @@ impl Simulation {
             &mut self.contacts,
         );
         let first = self.totals.steps == 0;
-        for c in self.contacts.contacts.iter_mut() {
-            let j = self
-                .model
-                .joint_between(c.key.vertex_block as usize, c.key.edge_block as usize);
+        for k in 0..self.contacts.contacts.len() {
+            let j = self.joint(k);
+            let c = &mut self.contacts.contacts[k];
             if c.state.is_closed() && !j.has_shear() {
                 c.state = ContactState::Sliding;
             }
@@ -858,9 +862,10 @@ impl Simulation {
     /// The joint of a contact.
     fn joint(&self, k: usize) -> JointProps {
         let key = self.contacts.contacts[k].key;
+        let m = |b: u32| self.material[b as usize] as usize;
         *self
             .model
-            .joint_between(key.vertex_block as usize, key.edge_block as usize)
+            .joint_of_materials(m(key.vertex_block), m(key.edge_block))
     }
 
     /// Sets the half step of every block for an attempt of size `dt` and the contacts'
@@ -1234,10 +1239,12 @@ impl Simulation {
                     }
                 }
                 ContactState::Locked | ContactState::Sliding => {
-                    let length = contact_length(&c, &self.shapes);
+                    // Only bonds need the length: looked up (a load from the edge block's
+                    // shape, often a cache miss) only for them.
+                    let length = || contact_length(&c, &self.shapes);
                     let holds_tension = c.bonded
                         && j.tensile_strength > 0.0
-                        && pn * d <= j.tensile_strength * length;
+                        && pn * d <= j.tensile_strength * length();
                     if d > open_band && !holds_tension {
                         n.state = ContactState::Open;
                         n.bonded = false;
@@ -1250,7 +1257,7 @@ impl Simulation {
                                     .eval(&self.d);
                                 let mut limit = n.normal_force.max(0.0) * j.tan_phi;
                                 if c.bonded {
-                                    limit += j.cohesion * length;
+                                    limit += j.cohesion * length();
                                 }
                                 if ps * s.abs() > limit {
                                     n.state = ContactState::Sliding;

@@ -887,8 +887,11 @@ pub struct Model {
 impl Model {
     /// The joint acting between blocks `a` and `b`.
     pub fn joint_between(&self, a: usize, b: usize) -> &JointProps {
-        let nm = self.materials.len();
-        let (ma, mb) = (self.blocks[a].material, self.blocks[b].material);
-        &self.joints[self.joint_of[ma * nm + mb] as usize]
+        self.joint_of_materials(self.blocks[a].material, self.blocks[b].material)
+    }
+
+    /// The joint acting between blocks of materials `ma` and `mb`.
+    pub fn joint_of_materials(&self, ma: usize, mb: usize) -> &JointProps {
+        &self.joints[self.joint_of[ma * self.materials.len() + mb] as usize]
     }
 }
