@@ -1,5 +1,6 @@
 //! Neighbour (broad-phase) search: block pairs whose bounding boxes, grown so that boxes
-//! within d_tol of each other overlap, by sort-and-sweep along the scene's longer axis.
+//! within d_tol of each other overlap, by sort-and-sweep along the axis where the boxes'
+//! intervals overlap least.
 
 use dda_geom::Aabb;
 use serde::{Deserialize, Serialize};
@@ -26,7 +27,8 @@ impl NeighbourPair {
 }
 
 /// All pairs of boxes no farther apart than `gap` (each box is grown by gap / 2), sorted.
-/// Sort-and-sweep along the longer axis of the scene: O(N log N + K) for K pairs.
+/// Sort-and-sweep along the axis where the boxes' intervals overlap least: O(N log N + K)
+/// for K pairs, plus the tests of pairs that overlap on that axis only.
 /// `out` is cleared first, so its buffer can be reused from step to step; a
 /// [`NeighbourSearch`] also keeps its sort order and scratch from call to call.
 pub fn neighbour_pairs(boxes: &[Aabb], gap: f64, out: &mut Vec<NeighbourPair>) {
@@ -41,6 +43,8 @@ pub fn neighbour_pairs(boxes: &[Aabb], gap: f64, out: &mut Vec<NeighbourPair>) {
 pub struct NeighbourSearch {
     /// Box indices in the order of the last sweep.
     order: Vec<u32>,
+    /// The axis of the last sweep (0: x, 1: y).
+    axis: usize,
     /// Pairs found by the sweep, then per lower block the start of its pairs.
     found: Vec<NeighbourPair>,
     start: Vec<u32>,
@@ -52,6 +56,38 @@ impl NeighbourSearch {
         Self::default()
     }
 
+    /// The axis to sweep along (0: x, 1: y): the one along which a box's grown interval
+    /// overlaps the fewest others on average, estimated as the sum of the intervals'
+    /// lengths over the spread of the boxes' centres. The spread of the scene's bounding
+    /// box would mislead: one long fixed base (the jointed columns' is three times the
+    /// column's width) makes a tall column look wide, and sweeping it along x tested 2 to
+    /// 2.6 times as many pairs as along y. The axis of the last call is kept unless the
+    /// other is clearly better, so that the kept order stays nearly sorted.
+    fn sweep_axis(&mut self, boxes: &[Aabb], gap: f64) -> usize {
+        let density = |axis: usize| {
+            let (mut length, mut lo, mut hi) = (0.0, f64::INFINITY, f64::NEG_INFINITY);
+            for b in boxes {
+                let (a, z) = if axis == 0 {
+                    (b.min.x, b.max.x)
+                } else {
+                    (b.min.y, b.max.y)
+                };
+                length += z - a + gap;
+                lo = f64::min(lo, 0.5 * (a + z));
+                hi = f64::max(hi, 0.5 * (a + z));
+            }
+            length / (hi - lo)
+        };
+        let (dx, dy) = (density(0), density(1));
+        let better = |d: f64, other: f64| d < 0.8 * other || (other.is_nan() && !d.is_nan());
+        self.axis = match self.axis {
+            0 if better(dy, dx) => 1,
+            1 if better(dx, dy) => 0,
+            kept => kept,
+        };
+        self.axis
+    }
+
     /// All pairs of `boxes` no farther apart than `gap`, sorted, into `out` (cleared).
     pub fn find(&mut self, boxes: &[Aabb], gap: f64, out: &mut Vec<NeighbourPair>) {
         out.clear();
@@ -59,9 +95,7 @@ impl NeighbourSearch {
             return;
         }
         let half = 0.5 * gap.max(0.0);
-        let scene = boxes.iter().skip(1).fold(boxes[0], |s, b| s.union(b));
-        let size = scene.size();
-        let axis = usize::from(size.y > size.x);
+        let axis = self.sweep_axis(boxes, gap);
         let lo = |b: &Aabb| if axis == 0 { b.min.x } else { b.min.y } - half;
         let hi = |b: &Aabb| if axis == 0 { b.max.x } else { b.max.y } + half;
         let n = boxes.len();
@@ -159,6 +193,52 @@ mod tests {
                 b.min += d;
                 b.max += d;
             }
+        }
+    }
+
+    /// Every pair of boxes within `gap`, by checking all of them.
+    fn brute_force(boxes: &[Aabb], gap: f64) -> Vec<NeighbourPair> {
+        let mut out = Vec::new();
+        for i in 0..boxes.len() {
+            for j in i + 1..boxes.len() {
+                if boxes[i]
+                    .expanded(0.5 * gap)
+                    .overlaps(&boxes[j].expanded(0.5 * gap))
+                {
+                    out.push(NeighbourPair::new(i as u32, j as u32));
+                }
+            }
+        }
+        out
+    }
+
+    /// A tall column of unit boxes on a base five times as wide as the column: the base
+    /// makes the scene wider than tall, but the sweep goes along y, where the column's
+    /// boxes overlap fewer others; laid out as a wide row, the same boxes are swept along
+    /// x. The pairs are the same either way.
+    #[test]
+    fn sweeps_along_the_axis_where_intervals_overlap_least() {
+        let unit = |x: f64, y: f64| Aabb {
+            min: DVec2::new(x, y),
+            max: DVec2::new(x + 1.0, y + 1.0),
+        };
+        let base = Aabb {
+            min: DVec2::new(-20.0, -1.0),
+            max: DVec2::new(30.0, 0.0),
+        };
+        let column: Vec<Aabb> = std::iter::once(base)
+            .chain((0..200).map(|k| unit((k % 10) as f64 * 1.01, (k / 10) as f64 * 1.01)))
+            .collect();
+        let row: Vec<Aabb> = (0..200)
+            .map(|k| unit((k / 10) as f64 * 1.01, (k % 10) as f64 * 1.01))
+            .collect();
+        let mut search = NeighbourSearch::new();
+        let mut out = Vec::new();
+        for (boxes, axis) in [(&row, 0), (&column, 1), (&row, 0)] {
+            search.find(boxes, 0.02, &mut out);
+            assert_eq!(search.axis, axis);
+            assert_eq!(out, brute_force(boxes, 0.02));
+            assert!(!out.is_empty());
         }
     }
 
