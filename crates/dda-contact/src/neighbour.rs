@@ -59,7 +59,7 @@ impl NeighbourSearch {
     /// The axis to sweep along (0: x, 1: y): the one along which a box's grown interval
     /// overlaps the fewest others on average, estimated as the sum of the intervals'
     /// lengths over the spread of the boxes' centres. The spread of the scene's bounding
-    /// box would mislead: one long fixed base (the jointed columns' is three times the
+    /// box would mislead: one long fixed base (the jointed columns' is five times the
     /// column's width) makes a tall column look wide, and sweeping it along x tested 2 to
     /// 2.6 times as many pairs as along y. The axis of the last call is kept unless the
     /// other is clearly better, so that the kept order stays nearly sorted.
