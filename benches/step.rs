@@ -9,6 +9,8 @@
 //!   block-sparse storage of the global matrix on the column's own block pattern, no solve.
 //! - `column_step/factorise_solve`: numeric Cholesky + solve of the global matrix on the
 //!   column's own block pattern (6 DOF per block), the symbolic analysis done once.
+//! - `column_step/resolve`: the forward and backward triangular sweeps of one right-hand
+//!   side with that factor.
 //! - `column_step/low_rank_solve/k`: a solve through a rank-k update of that factor.
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -142,6 +144,19 @@ fn bench_step(c: &mut Criterion) {
             },
             criterion::BatchSize::LargeInput,
         )
+    });
+    // Both triangular sweeps with that factor: the solve of a new right-hand side.
+    let mut factored = build();
+    factored.solve().expect("solve");
+    group.bench_function("resolve", |b| {
+        b.iter(|| {
+            factored.clear_rhs();
+            for i in 0..nb as u32 {
+                factored.add_rhs(i, 1.0, &[1.0; 6]);
+            }
+            assert!(factored.resolve());
+            black_box(factored.solution(0)[0])
+        })
     });
     // Solves through a low-rank update of that factor, k springs changed (all new
     // columns: the cost of the first low-rank solve after a factorisation).

@@ -1,6 +1,7 @@
 //! Neighbour (broad-phase) search: block pairs whose bounding boxes, grown so that boxes
 //! within d_tol of each other overlap, by sort-and-sweep along the axis where the boxes'
-//! intervals overlap least.
+//! intervals overlap least; optionally swept with a skin and reused while the boxes stay
+//! within it (a Verlet list).
 
 use dda_geom::Aabb;
 use serde::{Deserialize, Serialize};
@@ -39,6 +40,12 @@ pub fn neighbour_pairs(boxes: &[Aabb], gap: f64, out: &mut Vec<NeighbourPair>) {
 /// blocks move little in a step, so the order of the last call is nearly sorted and
 /// re-sorts in about linear time (the stable sort finds the runs), and nothing is
 /// allocated once the buffers have grown. Gives exactly [`neighbour_pairs`]' result.
+///
+/// With a skin ([`NeighbourSearch::with_skin`]) it sweeps for the gap plus twice the skin
+/// and keeps those pairs (a Verlet list): while no box edge has moved by more than the
+/// skin since, every pair within the gap is among them, and a call only filters them by
+/// the same box test the sweep applies. The result is the same either way; only the
+/// number of sweeps differs.
 #[derive(Clone, Debug, Default)]
 pub struct NeighbourSearch {
     /// Box indices in the order of the last sweep.
@@ -48,12 +55,51 @@ pub struct NeighbourSearch {
     /// Pairs found by the sweep, then per lower block the start of its pairs.
     found: Vec<NeighbourPair>,
     start: Vec<u32>,
+    /// How far a box edge may move before the kept pairs are swept anew (0: every call).
+    skin: f64,
+    /// The boxes and the gap of the last sweep with a skin, and the pairs it found.
+    built: Vec<Aabb>,
+    built_gap: f64,
+    kept: Vec<NeighbourPair>,
+    /// Sweeps made (with a skin: the calls that could not reuse the kept pairs).
+    sweeps: u64,
 }
 
 impl NeighbourSearch {
-    /// An empty search.
+    /// An empty search that sweeps at every call.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// An empty search that keeps the pairs within the gap plus twice `skin` and reuses
+    /// them while no box edge has moved by more than `skin` (a non-positive or non-finite
+    /// skin sweeps at every call).
+    pub fn with_skin(skin: f64) -> Self {
+        NeighbourSearch {
+            skin: if skin.is_finite() { skin.max(0.0) } else { 0.0 },
+            ..Self::default()
+        }
+    }
+
+    /// How many sweeps the calls so far have made.
+    pub fn sweeps(&self) -> u64 {
+        self.sweeps
+    }
+
+    /// Whether the kept pairs hold every pair of `boxes` within `gap`: same boxes and
+    /// gap, and no box edge moved by more than the skin (less a margin far above
+    /// rounding) since the sweep that found them.
+    fn kept_hold(&self, boxes: &[Aabb], gap: f64) -> bool {
+        let limit = 0.999 * self.skin;
+        let near = |a: f64, b: f64| (a - b).abs() <= limit;
+        self.built.len() == boxes.len()
+            && self.built_gap == gap
+            && self.built.iter().zip(boxes).all(|(o, b)| {
+                near(o.min.x, b.min.x)
+                    && near(o.min.y, b.min.y)
+                    && near(o.max.x, b.max.x)
+                    && near(o.max.y, b.max.y)
+            })
     }
 
     /// The axis to sweep along (0: x, 1: y): the one along which a box's grown interval
@@ -91,6 +137,32 @@ impl NeighbourSearch {
     /// All pairs of `boxes` no farther apart than `gap`, sorted, into `out` (cleared).
     pub fn find(&mut self, boxes: &[Aabb], gap: f64, out: &mut Vec<NeighbourPair>) {
         out.clear();
+        if self.skin == 0.0 {
+            self.sweep(boxes, gap, out);
+            return;
+        }
+        if !self.kept_hold(boxes, gap) {
+            let mut kept = std::mem::take(&mut self.kept);
+            self.sweep(boxes, gap.max(0.0) + 2.0 * self.skin, &mut kept);
+            self.kept = kept;
+            self.built.clear();
+            self.built.extend_from_slice(boxes);
+            self.built_gap = gap;
+        }
+        // The sweep's own test: grown boxes that overlap (the kept pairs are sorted).
+        let half = 0.5 * gap.max(0.0);
+        out.extend(self.kept.iter().filter(|p| {
+            boxes[p.a as usize]
+                .expanded(half)
+                .overlaps(&boxes[p.b as usize].expanded(half))
+        }));
+    }
+
+    /// All pairs of `boxes` no farther apart than `gap`, sorted, into `out` (cleared), by
+    /// sort-and-sweep.
+    fn sweep(&mut self, boxes: &[Aabb], gap: f64, out: &mut Vec<NeighbourPair>) {
+        out.clear();
+        self.sweeps += 1;
         if boxes.len() < 2 {
             return;
         }
@@ -153,17 +225,20 @@ mod tests {
     use super::*;
     use dda_geom::DVec2;
 
-    /// The search that keeps its order gives the plain search's pairs as boxes move.
-    #[test]
-    fn kept_order_matches_a_fresh_search() {
-        let mut rng = 12345u64;
-        let mut next = || {
+    /// A reproducible stream of numbers uniform in [0, 1) (a 64-bit LCG).
+    fn uniform(seed: u64) -> impl FnMut() -> f64 {
+        let mut rng = seed;
+        move || {
             rng = rng
                 .wrapping_mul(6364136223846793005)
                 .wrapping_add(1442695040888963407);
             (rng >> 11) as f64 / (1u64 << 53) as f64
-        };
-        let mut boxes: Vec<Aabb> = (0..300)
+        }
+    }
+
+    /// 300 boxes of 0.1 to 0.7 by 0.1 to 0.7 scattered over 10 x 4.
+    fn random_boxes(next: &mut impl FnMut() -> f64) -> Vec<Aabb> {
+        (0..300)
             .map(|_| {
                 let c = DVec2::new(10.0 * next(), 4.0 * next());
                 let h = DVec2::new(0.05 + 0.3 * next(), 0.05 + 0.3 * next());
@@ -172,7 +247,14 @@ mod tests {
                     max: c + h,
                 }
             })
-            .collect();
+            .collect()
+    }
+
+    /// The search that keeps its order gives the plain search's pairs as boxes move.
+    #[test]
+    fn kept_order_matches_a_fresh_search() {
+        let mut next = uniform(12345);
+        let mut boxes = random_boxes(&mut next);
         let mut search = NeighbourSearch::new();
         let (mut kept, mut fresh) = (Vec::new(), Vec::new());
         for _ in 0..20 {
@@ -194,6 +276,45 @@ mod tests {
                 b.max += d;
             }
         }
+    }
+
+    /// With a skin the search gives every pair within the gap, as a fresh search does,
+    /// while sweeping only after some box has moved farther than the skin since the last
+    /// sweep, or the gap has changed.
+    #[test]
+    fn a_skin_reuses_pairs_until_a_box_moves_past_it() {
+        let mut next = uniform(777);
+        let mut boxes = random_boxes(&mut next);
+        let (skin, rounds) = (0.05, 40u64);
+        let mut search = NeighbourSearch::with_skin(skin);
+        let mut out = Vec::new();
+        let mut forced = 0;
+        for round in 0..rounds {
+            // Every tenth round one box jumps by four skins, and the last rounds use a
+            // larger gap: both must sweep anew.
+            let gap = if round < 35 { 0.02 } else { 0.03 };
+            search.find(&boxes, gap, &mut out);
+            assert_eq!(out, brute_force(&boxes, gap), "round {round}");
+            assert!(!out.is_empty());
+            for b in boxes.iter_mut() {
+                let d = DVec2::new(0.01 * next() - 0.005, 0.01 * next() - 0.005);
+                b.min += d;
+                b.max += d;
+            }
+            if round % 10 == 9 {
+                let k = (next() * 300.0) as usize;
+                boxes[k].min.x += 4.0 * skin;
+                boxes[k].max.x += 4.0 * skin;
+                forced += 1;
+            }
+        }
+        // The first call, the jumps before the 10th, 20th and 30th calls, the new gap.
+        assert!(
+            forced == 4 && search.sweeps() >= 5,
+            "{} sweeps",
+            search.sweeps()
+        );
+        assert!(search.sweeps() < rounds / 2, "{} sweeps", search.sweeps());
     }
 
     /// Every pair of boxes within `gap`, by checking all of them.

@@ -283,6 +283,16 @@ const MAX_RANK: usize = 96;
 /// 9 analyses with 374k, 384k, 408k and 443k nonzeros (2.71, 2.76, 2.82 and 2.80 ms).
 const PATTERN_MARGIN: f64 = 2.0;
 
+/// The neighbour search's skin, in d_max: its pairs are found for d_tol plus twice the
+/// skin and reused while no block's box has moved by more than the skin
+/// ([`NeighbourSearch::with_skin`]). The pairs are the same whatever the skin; only
+/// the number of sweeps changes. Measured on paper 5.2b (826 blocks, 844 steps): skins
+/// of 1, 2, 3 and 5 d_max swept at 416, 289, 222 and 162 steps, and the search took
+/// 0.81%, 0.60%, 0.61% and 0.48% of the run's samples against 1.20% sweeping every
+/// step; at r_tol = 10, 1 and 2 d_max swept 68 and 38 times in 635 steps, 0.38% and
+/// 0.44% against 0.87%.
+const NEIGHBOUR_SKIN: f64 = 2.0;
+
 /// A spring in effect in an OCI iteration: its contact, whether it is the shear spring
 /// (else the normal one), its penalty, where it couples in the system, and its row.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -405,6 +415,7 @@ impl Simulation {
         let shapes = blocks.iter().map(|b| BlockShape::new(&b.polygon)).collect();
         let material = model.blocks.iter().map(|b| b.material as u32).collect();
         let n = blocks.len();
+        let skin = NEIGHBOUR_SKIN * model.params.d_max;
         Simulation {
             dt: p.dt0,
             nd: effects.dofs_per_block(),
@@ -426,7 +437,7 @@ impl Simulation {
             contacts: ContactSet::default(),
             system: BlockSystem::new(),
             prev: ContactSet::default(),
-            neighbours: NeighbourSearch::new(),
+            neighbours: NeighbourSearch::with_skin(skin),
             pairs: Vec::new(),
             saved: Vec::new(),
             pattern_pairs: Vec::new(),
@@ -770,9 +781,13 @@ impl Simulation {
         );
         let first = self.totals.steps == 0;
         for k in 0..self.contacts.contacts.len() {
+            // Open contacts are left as they are: only closed ones need their joint.
+            if !self.contacts.contacts[k].state.is_closed() {
+                continue;
+            }
             let j = self.joint(k);
             let c = &mut self.contacts.contacts[k];
-            if c.state.is_closed() && !j.has_shear() {
+            if !j.has_shear() {
                 c.state = ContactState::Sliding;
             }
             if first && c.active && c.state.is_closed() && j.bonds() {
