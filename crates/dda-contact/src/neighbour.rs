@@ -288,7 +288,6 @@ mod tests {
         let (skin, rounds) = (0.05, 40u64);
         let mut search = NeighbourSearch::with_skin(skin);
         let mut out = Vec::new();
-        let mut forced = 0;
         for round in 0..rounds {
             // Every tenth round one box jumps by four skins, and the last rounds use a
             // larger gap: both must sweep anew.
@@ -305,15 +304,11 @@ mod tests {
                 let k = (next() * 300.0) as usize;
                 boxes[k].min.x += 4.0 * skin;
                 boxes[k].max.x += 4.0 * skin;
-                forced += 1;
             }
         }
-        // The first call, the jumps before the 10th, 20th and 30th calls, the new gap.
-        assert!(
-            forced == 4 && search.sweeps() >= 5,
-            "{} sweeps",
-            search.sweeps()
-        );
+        // At least the first call, the calls after the jumps (the 11th, 21st and 31st)
+        // and the first with the new gap.
+        assert!(search.sweeps() >= 5, "{} sweeps", search.sweeps());
         assert!(search.sweeps() < rounds / 2, "{} sweeps", search.sweeps());
     }
 
