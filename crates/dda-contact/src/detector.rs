@@ -346,30 +346,113 @@ pub fn track(
     trial: &[Motion],
     set: &mut ContactSet,
 ) -> usize {
-    if !detector.tracks_trajectories() {
-        return 0;
+    let mut list = TrackList::new();
+    list.rebuild(detector, shapes, set);
+    list.track(detector, shapes, trial, set)
+}
+
+/// The candidates trajectory tracking may activate in one step, with their vertex and
+/// edge ends at step start copied beside them: the open-close iteration then reads one
+/// array in order instead of every candidate's two block shapes (loads that miss the
+/// cache), and computes the same trial positions from the same numbers.
+#[derive(Clone, Debug, Default)]
+pub struct TrackList {
+    entries: Vec<Tracked>,
+}
+
+/// One entry of a [`TrackList`].
+#[derive(Clone, Copy, Debug)]
+struct Tracked {
+    /// Index of the candidate in the step's [`ContactSet`].
+    contact: u32,
+    /// Its vertex block and edge block.
+    blocks: [u32; 2],
+    /// Its vertex and its edge's two ends at step start.
+    points: [DVec2; 3],
+}
+
+impl TrackList {
+    /// An empty list.
+    pub fn new() -> Self {
+        Self::default()
     }
-    let mut changed = 0;
-    // The trigger: outside the edge's line at step start (d_n0 > 0).
-    for c in set.contacts.iter_mut().filter(|c| !c.active && c.d_n > 0.0) {
-        let (a1, b0, b1) = trial_points(shapes, trial, c.key);
-        // The trigger: behind the edge's line in the trial (the sign of d_n1).
-        let (e, w) = (b1 - b0, a1 - b0);
-        if w.x * e.y - w.y * e.x >= 0.0 {
-            continue;
+
+    /// Lists the candidates of `set` (as detected at step start) that tracking may
+    /// activate: inactive, with the vertex outside the edge's line (d_n0 > 0, the trigger
+    /// of paper 2.3.2). Within a step no other candidate can meet the trigger: d_n0 is
+    /// fixed, and the open-close iteration only activates candidates, or moves a closed
+    /// spring between those behind their edge's line (d_n0 <= 0).
+    pub fn rebuild(
+        &mut self,
+        detector: &dyn ContactDetector,
+        shapes: &[BlockShape],
+        set: &ContactSet,
+    ) {
+        self.entries.clear();
+        if !detector.tracks_trajectories() {
+            return;
         }
-        let trial_m = VertexEdge::new(a1, b0, b1);
-        if detector.activates(VertexEdge { d_n: c.d_n, r: c.r }, trial_m) {
-            // Lock where the trajectory crossed the edge's line (0 <= t <= 1).
-            let t = c.d_n / (c.d_n - trial_m.d_n);
-            c.active = true;
-            c.state = crate::contact::ContactState::Locked;
-            c.locked_r = (c.r + t * (trial_m.r - c.r)).clamp(0.0, 1.0);
-            changed += 1;
+        for (k, c) in set.contacts.iter().enumerate() {
+            if c.active || c.d_n <= 0.0 {
+                continue;
+            }
+            let key = c.key;
+            let (vs, es) = (
+                &shapes[key.vertex_block as usize],
+                &shapes[key.edge_block as usize],
+            );
+            let j = key.edge as usize;
+            self.entries.push(Tracked {
+                contact: k as u32,
+                blocks: [key.vertex_block, key.edge_block],
+                points: [
+                    vs.vertices[key.vertex as usize],
+                    es.vertices[j],
+                    es.vertices[es.next(j)],
+                ],
+            });
         }
     }
-    if detector.keeps_closed_contacts() {
-        changed += crate::cover::follow_deepest(shapes, trial, set);
+
+    /// Open-close iteration update of activity for the set the list was built from (see
+    /// [`track`]). Returns how many candidates became active.
+    pub fn track(
+        &self,
+        detector: &dyn ContactDetector,
+        shapes: &[BlockShape],
+        trial: &[Motion],
+        set: &mut ContactSet,
+    ) -> usize {
+        if !detector.tracks_trajectories() {
+            return 0;
+        }
+        let mut changed = 0;
+        for t in &self.entries {
+            let c = &mut set.contacts[t.contact as usize];
+            if c.active {
+                continue;
+            }
+            let (mv, me) = (&trial[t.blocks[0] as usize], &trial[t.blocks[1] as usize]);
+            let [a, b0, b1] = t.points;
+            let (a1, b0, b1) = (mv.apply(a), me.apply(b0), me.apply(b1));
+            // The trigger: behind the edge's line in the trial (the sign of d_n1).
+            let (e, w) = (b1 - b0, a1 - b0);
+            if w.x * e.y - w.y * e.x >= 0.0 {
+                continue;
+            }
+            let trial_m = VertexEdge::new(a1, b0, b1);
+            if detector.activates(VertexEdge { d_n: c.d_n, r: c.r }, trial_m) {
+                // Lock where the trajectory crossed the edge's line (0 <= t <= 1).
+                let t = c.d_n / (c.d_n - trial_m.d_n);
+                c.active = true;
+                c.state = crate::contact::ContactState::Locked;
+                c.locked_r = (c.r + t * (trial_m.r - c.r)).clamp(0.0, 1.0);
+                changed += 1;
+            }
+        }
+        if detector.keeps_closed_contacts() {
+            changed += crate::cover::follow_deepest(shapes, trial, set);
+        }
+        changed
     }
-    changed
 }

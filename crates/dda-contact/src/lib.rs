@@ -24,8 +24,8 @@ mod test_util;
 pub use self::contact::{Contact, ContactKey, ContactSet, ContactState, PairContacts};
 pub use self::cover::CoverDetector;
 pub use self::detector::{
-    ContactDetector, DETECTOR_NAMES, DetectionParams, UnknownDetector, detect, detector_by_name,
-    track,
+    ContactDetector, DETECTOR_NAMES, DetectionParams, TrackList, UnknownDetector, detect,
+    detector_by_name, track,
 };
 pub use self::neighbour::{NeighbourPair, NeighbourSearch, neighbour_pairs};
 pub use self::shape::BlockShape;

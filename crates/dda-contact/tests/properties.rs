@@ -1,13 +1,14 @@
 //! Property tests of the contact layer: the cover detector against the geometry layer's
 //! signed distance, activity when blocks overlap, swap symmetry for every detector,
-//! slivers without NaN or panic, neighbour search against brute force, and parallel
-//! detection identical to sequential.
+//! slivers without NaN or panic, neighbour search against brute force, parallel
+//! detection identical to sequential, and trajectory tracking through a step's
+//! [`TrackList`] identical to a scan of every candidate.
 
 use dda_contact::{
-    BlockShape, Contact, ContactKey, ContactSet, CoverDetector, DetectionParams, NeighbourPair,
-    detect, detector_by_name, neighbour_pairs,
+    BlockShape, Contact, ContactDetector, ContactKey, ContactSet, ContactState, CoverDetector,
+    DetectionParams, NeighbourPair, TrackList, detect, detector_by_name, neighbour_pairs,
 };
-use dda_geom::{Aabb, ConvexPolygon, CoverSource, DVec2, VertexEdge, signed_distance};
+use dda_geom::{Aabb, ConvexPolygon, CoverSource, DVec2, Motion, VertexEdge, signed_distance};
 use proptest::prelude::*;
 
 #[path = "../../../tests/support/polygons.rs"]
@@ -166,11 +167,8 @@ fn cover_detector_is_object_safe_and_named() {
     assert!(detector_by_name("type-3").is_err());
 }
 
-/// Parallel detection over a jointed column equals the sequential run, for every detector.
-/// (Needs the `rayon` feature, which the workspace enables through the facade.)
-#[cfg(feature = "rayon")]
-#[test]
-fn parallel_detection_is_sequential_detection() {
+/// The blocks of a 10 m x 20 m region cut by two joint sets (60 and 15 degrees).
+fn jointed_column() -> Vec<BlockShape> {
     let region =
         dda_geom::shapes::rectangle(DVec2::ZERO, DVec2::new(10.0, 20.0)).expect("rectangle");
     let sets = [
@@ -186,7 +184,101 @@ fn parallel_detection_is_sequential_detection() {
         },
     ];
     let cut = dda_geom::cut_by_joint_sets(&region, &sets, 1e-4).expect("cut");
-    let shapes: Vec<BlockShape> = cut.blocks.iter().map(BlockShape::new).collect();
+    cut.blocks.iter().map(BlockShape::new).collect()
+}
+
+/// Trajectory tracking as paper 2.3.2 states it, by a scan of every candidate: an
+/// inactive one whose vertex was outside its edge's line at step start and is behind it
+/// in the trial becomes active, locked where it crossed, if the detector says so.
+fn track_by_scan(
+    det: &dyn ContactDetector,
+    shapes: &[BlockShape],
+    trial: &[Motion],
+    set: &mut ContactSet,
+) -> usize {
+    let mut changed = 0;
+    for c in set.contacts.iter_mut() {
+        if c.active || c.d_n <= 0.0 {
+            continue;
+        }
+        let k = c.key;
+        let (vs, es) = (
+            &shapes[k.vertex_block as usize],
+            &shapes[k.edge_block as usize],
+        );
+        let (mv, me) = (
+            &trial[k.vertex_block as usize],
+            &trial[k.edge_block as usize],
+        );
+        let j = k.edge as usize;
+        let a1 = mv.apply(vs.vertices[k.vertex as usize]);
+        let (b0, b1) = (me.apply(es.vertices[j]), me.apply(es.vertices[es.next(j)]));
+        let (e, w) = (b1 - b0, a1 - b0);
+        if w.x * e.y - w.y * e.x >= 0.0 {
+            continue;
+        }
+        let m = VertexEdge::new(a1, b0, b1);
+        if det.activates(VertexEdge { d_n: c.d_n, r: c.r }, m) {
+            let t = c.d_n / (c.d_n - m.d_n);
+            c.active = true;
+            c.state = ContactState::Locked;
+            c.locked_r = (c.r + t * (m.r - c.r)).clamp(0.0, 1.0);
+            changed += 1;
+        }
+    }
+    changed
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    /// Over two open-close iterations with random block motions (the second after the
+    /// first one's activations), tracking through the list made at step start activates
+    /// exactly what a scan of every candidate does, with the same locked points.
+    #[test]
+    fn track_list_is_a_scan_of_every_candidate(seed in any::<u64>()) {
+        let shapes = jointed_column();
+        let boxes: Vec<Aabb> = shapes.iter().map(|s| s.aabb).collect();
+        let params = DetectionParams::new(0.05, 2f64.to_radians());
+        let mut pairs = Vec::new();
+        neighbour_pairs(&boxes, params.d_tol, &mut pairs);
+        let mut set = ContactSet::default();
+        detect(&CoverDetector, &shapes, &pairs, &params, &ContactSet::default(), false, &mut set);
+        let mut list = TrackList::new();
+        list.rebuild(&CoverDetector, &shapes, &set);
+        let mut by_scan = set.clone();
+        // Motions of up to d_tol and 0.02 rad, from a xorshift stream.
+        let mut x = seed | 1;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let mut activated = 0;
+        for _ in 0..2 {
+            let trial: Vec<Motion> = shapes
+                .iter()
+                .map(|s| {
+                    let d = [0.05 * next(), 0.05 * next(), 0.02 * next(), 1e-3 * next(), 1e-3 * next(), 1e-3 * next()];
+                    Motion::new(s.centroid, &d)
+                })
+                .collect();
+            let n = list.track(&CoverDetector, &shapes, &trial, &mut set);
+            prop_assert_eq!(n, track_by_scan(&CoverDetector, &shapes, &trial, &mut by_scan));
+            prop_assert_eq!(&set, &by_scan);
+            activated += n;
+        }
+        prop_assert!(activated > 0, "no candidate was activated: the test tests nothing");
+    }
+}
+
+/// Parallel detection over a jointed column equals the sequential run, for every detector.
+/// (Needs the `rayon` feature, which the workspace enables through the facade.)
+#[cfg(feature = "rayon")]
+#[test]
+fn parallel_detection_is_sequential_detection() {
+    let shapes = jointed_column();
     let boxes: Vec<Aabb> = shapes.iter().map(|s| s.aabb).collect();
     let params = DetectionParams::new(0.05, 2f64.to_radians());
     let mut pairs = Vec::new();

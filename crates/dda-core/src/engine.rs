@@ -36,7 +36,7 @@ use crate::springs::{HalfStep, Row, contact_length, contact_points, normal_row, 
 use crate::system::{BlockSystem, Entry, RankOne, SolveError};
 use dda_contact::{
     BlockShape, ContactDetector, ContactSet, ContactState, DetectionParams, NeighbourPair,
-    NeighbourSearch, detector_by_name,
+    NeighbourSearch, TrackList, detector_by_name,
 };
 use dda_geom::{
     Aabb, ConvexPolygon, DVec2, Motion, VertexEdge, check_displacement, displace_point, separation,
@@ -294,7 +294,10 @@ const PATTERN_MARGIN: f64 = 2.0;
 const NEIGHBOUR_SKIN: f64 = 2.0;
 
 /// A spring in effect in an OCI iteration: its contact, whether it is the shear spring
-/// (else the normal one), its penalty, where it couples in the system, and its row.
+/// (else the normal one), its penalty, where it couples in the system, and what its row
+/// depends on besides the attempt's geometry: nothing for a normal spring (its row is
+/// the contact's in `rows`), the locked point for a shear spring. Two springs of one
+/// attempt that compare equal have the same row ([`Simulation::spring_row`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Spring {
     contact: u32,
@@ -302,7 +305,21 @@ struct Spring {
     penalty: f64,
     /// The system entry coupling its two blocks, if both are free.
     entry: Option<Entry>,
-    row: Row,
+    /// The shear spring's locked point (ratio along the edge); 0 for a normal spring.
+    anchor: f64,
+}
+
+impl Spring {
+    /// Its row in the attempt whose contact rows are `rows` (see [`Simulation::spring_row`]).
+    #[inline]
+    fn row(&self, rows: &[Row], set: &ContactSet, shapes: &[BlockShape], half: &[HalfStep]) -> Row {
+        let k = self.contact as usize;
+        if self.shear {
+            shear_row(&set.contacts[k], shapes, half, self.anchor)
+        } else {
+            rows[k]
+        }
+    }
 }
 
 /// A running simulation of a validated scene.
@@ -330,6 +347,8 @@ pub struct Simulation {
     // Work buffers, reused from step to step.
     system: BlockSystem,
     prev: ContactSet,
+    /// The candidates trajectory tracking may activate in this step.
+    track_list: TrackList,
     neighbours: NeighbourSearch,
     pairs: Vec<NeighbourPair>,
     /// The contacts at step start, restored when an attempt is cut.
@@ -437,6 +456,7 @@ impl Simulation {
             contacts: ContactSet::default(),
             system: BlockSystem::new(),
             prev: ContactSet::default(),
+            track_list: TrackList::new(),
             neighbours: NeighbourSearch::with_skin(skin),
             pairs: Vec::new(),
             saved: Vec::new(),
@@ -794,6 +814,8 @@ impl Simulation {
                 c.bonded = true;
             }
         }
+        self.track_list
+            .rebuild(self.detector.as_ref(), &self.shapes, &self.contacts);
     }
 
     /// Fixes the pattern of the global matrix from the candidate pairs between free
@@ -875,6 +897,7 @@ impl Simulation {
     }
 
     /// The joint of a contact.
+    #[inline]
     fn joint(&self, k: usize) -> JointProps {
         let key = self.contacts.contacts[k].key;
         let m = |b: u32| self.material[b as usize] as usize;
@@ -920,7 +943,7 @@ impl Simulation {
                     shear: false,
                     penalty: pn,
                     entry,
-                    row: self.rows[k],
+                    anchor: 0.0,
                 });
                 let j = self.joint(k);
                 if !j.has_shear() {
@@ -928,13 +951,12 @@ impl Simulation {
                 }
                 match c.state {
                     ContactState::Locked => {
-                        let row = shear_row(&c, &self.shapes, &self.half, c.locked_r);
                         self.springs.push(Spring {
                             contact,
                             shear: true,
                             penalty: ps,
                             entry,
-                            row,
+                            anchor: c.locked_r,
                         });
                     }
                     ContactState::Sliding if c.slide_dir != 0.0 => {
@@ -951,15 +973,24 @@ impl Simulation {
         }
     }
 
+    /// The row of spring `s` in this attempt: the contact's normal row, or its shear row
+    /// at the spring's locked point (computed again, by the same function on the same
+    /// geometry, so the same bits).
+    #[inline]
+    fn spring_row(&self, s: &Spring) -> Row {
+        s.row(&self.rows, &self.contacts, &self.shapes, &self.half)
+    }
+
     /// Adds the right-hand side of the base terms, the springs and the forces.
     fn assemble_rhs(&mut self) {
         for (f, rhs) in self.base_f.iter().enumerate() {
             self.system.add_rhs(f as u32, 1.0, rhs);
         }
         for s in &self.springs {
-            for (b, c) in s.row.blocks.iter().zip(&s.row.c) {
+            let row = self.spring_row(s);
+            for (b, c) in row.blocks.iter().zip(&row.c) {
                 if let Some(f) = self.free[*b as usize] {
-                    self.system.add_rhs(f, -s.penalty * s.row.g0, c);
+                    self.system.add_rhs(f, -s.penalty * row.g0, c);
                 }
             }
         }
@@ -980,7 +1011,8 @@ impl Simulation {
             self.system.add_diagonal(f as u32, k);
         }
         for s in &self.springs {
-            add_spring(&mut self.system, &self.free, s.entry, s.penalty, &s.row);
+            let row = self.spring_row(s);
+            add_spring(&mut self.system, &self.free, s.entry, s.penalty, &row);
         }
         self.assemble_rhs();
         let t1 = Instant::now();
@@ -1032,24 +1064,23 @@ impl Simulation {
         let (now, then) = (&self.springs, &self.factored_springs);
         let (mut i, mut j) = (0, 0);
         let free = &self.free;
+        let (rows, set, shapes, half) = (&self.rows, &self.contacts, &self.shapes, &self.half);
         let (changes, rhs_changes) = (&mut self.changes, &mut self.rhs_changes);
         // A spring added (sign 1) or removed (-1): its stiffness p c c^T and its
         // right-hand side -p g0 c.
         let mut change = |s: &Spring, sign: f64| {
-            let blocks = [
-                free[s.row.blocks[0] as usize],
-                free[s.row.blocks[1] as usize],
-            ];
+            let row = s.row(rows, set, shapes, half);
+            let blocks = [free[row.blocks[0] as usize], free[row.blocks[1] as usize]];
             let p = sign * s.penalty;
             changes.push(RankOne {
                 blocks,
-                c: s.row.c,
+                c: row.c,
                 s: p,
             });
             rhs_changes.push(RankOne {
                 blocks,
-                c: s.row.c,
-                s: -p * s.row.g0,
+                c: row.c,
+                s: -p * row.g0,
             });
             changes.len() <= MAX_RANK
         };
@@ -1059,7 +1090,8 @@ impl Simulation {
                 (Some(a), Some(b)) if key(a) == key(b) => {
                     i += 1;
                     j += 1;
-                    a.row == b.row && a.penalty == b.penalty || {
+                    // Equal springs of one attempt have equal rows.
+                    a == b || {
                         change(a, 1.0);
                         change(b, -1.0)
                     }
@@ -1170,7 +1202,7 @@ impl Simulation {
             let mut changed = self.update_states();
             rec.assembly_s += t2.elapsed().as_secs_f64();
             let t3 = Instant::now();
-            let activated = dda_contact::track(
+            let activated = self.track_list.track(
                 self.detector.as_ref(),
                 &self.shapes,
                 &self.motions,
