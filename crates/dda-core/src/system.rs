@@ -81,7 +81,8 @@ pub struct BlockSystem {
     /// Scratch of the batched sweeps of new low-rank columns.
     sweep: Scratch,
     /// Low-rank solves: L^-1 u for every u solved since the factorisation (column-major,
-    /// n per column, zero outside its path), and each column's u.
+    /// n per column; only the rows of its path are its own, the rest are left from
+    /// earlier columns and never read), and each column's u.
     z: Vec<f64>,
     z_rows: Vec<([Option<u32>; 2], [Vec6; 2])>,
     /// Per column of `z`: the supernodes it may be nonzero on (`paths[path_start[c]..
@@ -464,7 +465,6 @@ impl BlockSystem {
             .map_err(|_| SolveError::NotPositiveDefinite)?;
         self.numeric_count += 1;
         self.factored = true;
-        self.z.clear();
         self.z_rows.clear();
         self.paths.clear();
         self.path_start.truncate(1);
@@ -526,25 +526,32 @@ impl BlockSystem {
                 None => {
                     let col = self.z_rows.len();
                     self.z_rows.push(key);
-                    self.z.resize((col + 1) * n, 0.0);
                     let (pos, nd) = (&self.pos, self.nd);
-                    let zc = &mut self.z[col * n..(col + 1) * n];
-                    let mut first_rows = [None; 2];
-                    for ((b, c), first) in t.blocks.iter().zip(&t.c).zip(&mut first_rows) {
-                        if let Some(b) = b {
-                            let p = pos[*b as usize] as usize * nd;
-                            *first = Some(p);
-                            for (a, v) in zc[p..p + nd].iter_mut().enumerate() {
-                                *v += c[a];
-                            }
-                        }
-                    }
+                    let first_rows = t.blocks.map(|b| b.map(|b| pos[b as usize] as usize * nd));
                     let cols = first_rows
                         .into_iter()
                         .flatten()
                         .flat_map(|p| [p, p + nd - 1]);
+                    let at = self.paths.len();
                     self.tree.path(cols, &mut self.paths);
                     self.path_start.push(self.paths.len());
+                    // Every sweep, product and update of the column reads and writes
+                    // only its path's rows (see `Factor::forward_paths`): only those are
+                    // zeroed, in a buffer kept from one factorisation to the next.
+                    if self.z.len() < (col + 1) * n {
+                        self.z.resize((col + 1) * n, 0.0);
+                    }
+                    let zc = &mut self.z[col * n..(col + 1) * n];
+                    for rows in factor.path_rows(&self.paths[at..]) {
+                        zc[rows].fill(0.0);
+                    }
+                    for (p, c) in first_rows.iter().zip(&t.c) {
+                        if let Some(p) = p {
+                            for (v, x) in zc[*p..*p + nd].iter_mut().zip(c) {
+                                *v += x;
+                            }
+                        }
+                    }
                     col
                 }
             };
@@ -1004,7 +1011,20 @@ mod tests {
         to_fixed.truncate(3);
         let first: Vec<RankOne> = added.iter().chain(&removed).copied().collect();
         let second: Vec<RankOne> = first.iter().chain(&to_fixed).copied().collect();
-        for (terms, rhs_terms) in [(&first, &loads[..2]), (&second, &loads[..])] {
+        let rounds = [
+            (false, &first, &loads[..2]),
+            (false, &second, &loads[..]),
+            // A new factorisation keeps the columns' buffer, and what lies outside a
+            // column's path is never read: poisoned with NaN, the solves still match.
+            (true, &first, &loads[..2]),
+            (true, &second, &loads[..]),
+        ];
+        for (refactorise, terms, rhs_terms) in rounds {
+            if refactorise && !sys.z.iter().any(|v| v.is_nan()) {
+                assemble(&mut sys, &base.iter().collect::<Vec<_>>(), &[]);
+                sys.solve().unwrap();
+                sys.z.fill(f64::NAN);
+            }
             assert!(sys.solve_low_rank(terms, rhs_terms));
             let x = sys.rhs.clone();
             // The changed system, assembled and checked directly.
