@@ -6,8 +6,9 @@
 //! One step of detection: block shapes ([`BlockShape`]) -> neighbour pairs
 //! ([`neighbour_pairs`], AABBs grown by d_tol) -> per pair, the detector's candidate
 //! contacts with their initial activity -> states inherited from the previous step
-//! ([`detect`]). During open-close iteration the engine asks [`track`] which inactive
-//! candidates the trial displacements make active (trajectory tracking, paper eq. 12-13).
+//! ([`detect`]). During open-close iteration the engine asks which inactive candidates
+//! the trial displacements make active (trajectory tracking, paper eq. 12-13): [`track`],
+//! or a [`TrackList`] made once per step, which finds the same for less work.
 //! The mechanics (springs, Mohr-Coulomb) belong to the engine, not here.
 
 mod contact;
