@@ -322,6 +322,14 @@ impl Spring {
     }
 }
 
+/// The row of an inactive contact until it becomes active: NaN, so that a read of it
+/// could not pass unseen.
+const NO_ROW: Row = Row {
+    g0: f64::NAN,
+    blocks: [0, 0],
+    c: [[0.0; 6]; 2],
+};
+
 /// A running simulation of a validated scene.
 pub struct Simulation {
     model: Model,
@@ -362,7 +370,8 @@ pub struct Simulation {
     pair_entry: Vec<Option<Entry>>,
     /// Each block's half step, where the attempt's contact rows are linearised.
     half: Vec<HalfStep>,
-    /// Each contact's normal row for the attempt.
+    /// Each active contact's normal row for the attempt (an inactive one's is a NaN
+    /// placeholder until it becomes active: only active contacts' rows are read).
     rows: Vec<Row>,
     springs: Vec<Spring>,
     /// Friction forces in effect: contact, magnitude, row.
@@ -918,7 +927,21 @@ impl Simulation {
         }
         self.rows.clear();
         for c in &self.contacts.contacts {
-            self.rows.push(normal_row(c, &self.shapes, &self.half));
+            self.rows.push(if c.active {
+                normal_row(c, &self.shapes, &self.half)
+            } else {
+                NO_ROW
+            });
+        }
+    }
+
+    /// Linearises the rows of contacts made active since [`Simulation::linearise`] (by
+    /// trajectory tracking, or a spring moved to the deepest face), as it would have.
+    fn linearise_new_active(&mut self) {
+        for (c, row) in self.contacts.contacts.iter().zip(self.rows.iter_mut()) {
+            if c.active && row.g0.is_nan() {
+                *row = normal_row(c, &self.shapes, &self.half);
+            }
         }
     }
 
@@ -1210,6 +1233,7 @@ impl Simulation {
             );
             if activated > 0 {
                 self.normalise_new_contacts();
+                self.linearise_new_active();
             }
             changed += activated;
             rec.detection_s += t3.elapsed().as_secs_f64();
