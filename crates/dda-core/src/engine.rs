@@ -5,8 +5,9 @@
 //! - Detection runs once per step at its start. The pattern of the global matrix must hold
 //!   every pair with candidates; it is set to all free neighbour pairs and kept, step
 //!   after step, until a needed pair is missing.
-//! - Each attempt linearises the contact rows at its predicted midpoint: every block
-//!   moved by half of V dt (`springs::HalfStep`, `linearise`).
+//! - Each attempt linearises the active contacts' rows at its predicted midpoint: every
+//!   block moved by half of V dt (`springs::HalfStep`, `linearise`); a contact tracking
+//!   activates is linearised there when it is.
 //! - Before the OCI, contact states are predicted from the step's right-hand side solved
 //!   with the previous step's factor (`predict_states`).
 //! - The open-close iteration (OCI) assembles the springs of the active closed contacts,
