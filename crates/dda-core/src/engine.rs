@@ -907,7 +907,6 @@ impl Simulation {
     }
 
     /// The joint of a contact.
-    #[inline]
     fn joint(&self, k: usize) -> JointProps {
         let key = self.contacts.contacts[k].key;
         let m = |b: u32| self.material[b as usize] as usize;
@@ -936,12 +935,21 @@ impl Simulation {
         }
     }
 
-    /// Linearises the rows of contacts made active since [`Simulation::linearise`] (by
-    /// trajectory tracking, or a spring moved to the deepest face), as it would have.
-    fn linearise_new_active(&mut self) {
-        for (c, row) in self.contacts.contacts.iter().zip(self.rows.iter_mut()) {
-            if c.active && row.g0.is_nan() {
-                *row = normal_row(c, &self.shapes, &self.half);
+    /// Sets up the contacts made active since [`Simulation::linearise`] (by trajectory
+    /// tracking, or a spring moved to the deepest face; the ones whose row is still
+    /// [`NO_ROW`]): their rows are linearised as `linearise` would have, and those
+    /// tracking brought back locked slide instead where the joint has no shear (every
+    /// other closed contact of such a joint slides already: the step-start normalisation
+    /// and `update_states` see to it).
+    fn set_up_new_active(&mut self) {
+        for k in 0..self.contacts.contacts.len() {
+            let c = self.contacts.contacts[k];
+            if !(c.active && self.rows[k].g0.is_nan()) {
+                continue;
+            }
+            self.rows[k] = normal_row(&c, &self.shapes, &self.half);
+            if c.state == ContactState::Locked && !self.joint(k).has_shear() {
+                self.contacts.contacts[k].state = ContactState::Sliding;
             }
         }
     }
@@ -1233,8 +1241,7 @@ impl Simulation {
                 &mut self.contacts,
             );
             if activated > 0 {
-                self.normalise_new_contacts();
-                self.linearise_new_active();
+                self.set_up_new_active();
             }
             changed += activated;
             rec.detection_s += t3.elapsed().as_secs_f64();
@@ -1243,17 +1250,6 @@ impl Simulation {
             }
         }
         Ok((false, max_oci))
-    }
-
-    /// Contacts just activated by trajectory tracking come back locked; frictionless
-    /// joints make them slide instead.
-    fn normalise_new_contacts(&mut self) {
-        for k in 0..self.contacts.contacts.len() {
-            let c = self.contacts.contacts[k];
-            if c.state == ContactState::Locked && !self.joint(k).has_shear() {
-                self.contacts.contacts[k].state = ContactState::Sliding;
-            }
-        }
     }
 
     /// Copies the solution into per-block motions (zero for fixed blocks).
