@@ -38,10 +38,8 @@ pub fn parse(args: &[String], root: &Path) -> Result<Options, String> {
         out: root.join("docs"),
         write_scenes: None,
     };
-    let mut it = args.iter();
-    while let Some(flag) = it.next() {
-        let value = it.next().ok_or_else(|| format!("{flag} needs a value"))?;
-        match flag.as_str() {
+    for (flag, value) in crate::args::pairs(args)? {
+        match flag {
             "--blocks" => {
                 o.blocks = value
                     .split(',')

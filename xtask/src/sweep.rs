@@ -9,6 +9,7 @@
 //! (default 5,000, nearly four times the paper's longest run) is stopped and counted as
 //! not permissible, so that a detector whose time step collapses cannot hold up a sweep.
 
+use crate::args;
 use dda::bench::{PAPER_COLUMNS, mechanical_energy};
 use dda::core::{RunOptions, Simulation};
 use dda::report::plot;
@@ -76,19 +77,13 @@ pub fn parse(args: &[String]) -> Result<Options, String> {
         max_steps: 5000,
         out: PathBuf::from("runs/sweep"),
     };
-    let mut it = args.iter();
-    while let Some(flag) = it.next() {
-        let value = it.next().ok_or_else(|| format!("`{flag}` needs a value"))?;
-        let list =
-            |v: &str| -> Vec<String> { v.split(',').map(|s| s.trim().to_string()).collect() };
-        match flag.as_str() {
+    let list = |v: &str| -> Vec<String> { v.split(',').map(|s| s.trim().to_string()).collect() };
+    for (flag, value) in args::pairs(args)? {
+        match flag {
             "--models" => {
                 o.models = list(value)
                     .iter()
-                    .map(|m| {
-                        m.parse()
-                            .map_err(|_| format!("--models: `{m}` is not a block count"))
-                    })
+                    .map(|m| args::paper_column(flag, m))
                     .collect::<Result<_, _>>()?;
             }
             "--detectors" => o.detectors = list(value),
@@ -101,29 +96,10 @@ pub fn parse(args: &[String]) -> Result<Options, String> {
                     })
                     .collect::<Result<_, _>>()?;
             }
-            "--jobs" => {
-                o.jobs = value
-                    .parse()
-                    .ok()
-                    .filter(|&j| j > 0)
-                    .ok_or_else(|| format!("--jobs: `{value}` is not a positive count"))?;
-            }
+            "--jobs" => o.jobs = args::positive_count(flag, value)? as usize,
             "--out" => o.out = PathBuf::from(value),
-            "--max-steps" => {
-                o.max_steps = value
-                    .parse()
-                    .ok()
-                    .filter(|&n| n > 0)
-                    .ok_or_else(|| format!("--max-steps: `{value}` is not a positive count"))?;
-            }
+            "--max-steps" => o.max_steps = args::positive_count(flag, value)?,
             other => return Err(format!("unknown option `{other}`")),
-        }
-    }
-    for m in &o.models {
-        if !PAPER_COLUMNS.iter().any(|c| c.blocks == *m) {
-            return Err(format!(
-                "--models: no paper column has {m} blocks (20, 93, 229, 826)"
-            ));
         }
     }
     for d in &o.detectors {
@@ -132,8 +108,15 @@ pub fn parse(args: &[String]) -> Result<Options, String> {
     Ok(o)
 }
 
-/// Runs one combination, stopping it after `max_steps` steps.
-fn run_one(model: usize, detector: &str, r_tol: f64, max_steps: u64) -> Row {
+/// Runs one combination, stopping it after `max_steps` steps, with gravity scaled by
+/// `gravity_factor` (1 for the paper's scene; `cargo xtask target` perturbs it).
+pub fn run_one(
+    model: usize,
+    detector: &str,
+    r_tol: f64,
+    max_steps: u64,
+    gravity_factor: f64,
+) -> Row {
     let column = PAPER_COLUMNS
         .iter()
         .find(|c| c.blocks == model)
@@ -142,6 +125,9 @@ fn run_one(model: usize, detector: &str, r_tol: f64, max_steps: u64) -> Row {
     let mut scene = column.scene();
     scene.analysis.detector = detector.into();
     scene.scale_tolerances(r_tol);
+    if let Some(g) = scene.analysis.gravity.as_mut() {
+        *g = g.map(|c| c * gravity_factor);
+    }
     let mut row = Row {
         model,
         detector: detector.into(),
@@ -242,7 +228,7 @@ pub fn run(root: &Path, o: &Options) -> Result<(), String> {
                         break;
                     };
                     bar.set_message(format!("{m} blocks, {d}, r_tol {r}"));
-                    let row = run_one(*m, d, *r, o.max_steps);
+                    let row = run_one(*m, d, *r, o.max_steps, 1.0);
                     if bar.is_hidden() {
                         // No terminal: one line per run, so a log shows progress.
                         eprintln!(
@@ -271,33 +257,38 @@ pub fn run(root: &Path, o: &Options) -> Result<(), String> {
     Ok(())
 }
 
+/// The header line of `sweep.csv`.
+pub const CSV_HEADER: &str = "model,detector,r_tol,steps,oci_cycles,detection_s,assembly_s,\
+                              solve_s,total_s,max_penetration,energy_error,verdict,error";
+
+/// One run as a line of `sweep.csv`, without its newline.
+pub fn csv_line(r: &Row) -> String {
+    format!(
+        "{},{},{},{},{},{:.4},{:.4},{:.4},{:.4},{:e},{:e},{},{}",
+        r.model,
+        r.detector,
+        r.r_tol,
+        r.steps,
+        r.oci_cycles,
+        r.detection_s,
+        r.assembly_s,
+        r.solve_s,
+        r.total_s,
+        r.max_penetration,
+        r.energy_error,
+        if r.verdict {
+            "permissible"
+        } else {
+            "not permissible"
+        },
+        r.error.as_deref().unwrap_or("").replace(',', ";")
+    )
+}
+
 fn write_files(out: &Path, rows: &[Row]) -> Result<(), String> {
-    let mut csv = String::from(
-        "model,detector,r_tol,steps,oci_cycles,detection_s,assembly_s,solve_s,total_s,\
-         max_penetration,energy_error,verdict,error\n",
-    );
+    let mut csv = format!("{CSV_HEADER}\n");
     for r in rows {
-        let _ = writeln!(
-            csv,
-            "{},{},{},{},{},{:.4},{:.4},{:.4},{:.4},{:e},{:e},{},{}",
-            r.model,
-            r.detector,
-            r.r_tol,
-            r.steps,
-            r.oci_cycles,
-            r.detection_s,
-            r.assembly_s,
-            r.solve_s,
-            r.total_s,
-            r.max_penetration,
-            r.energy_error,
-            if r.verdict {
-                "permissible"
-            } else {
-                "not permissible"
-            },
-            r.error.as_deref().unwrap_or("").replace(',', ";")
-        );
+        let _ = writeln!(csv, "{}", csv_line(r));
     }
     let write = |name: &str, text: String| {
         std::fs::write(out.join(name), text).map_err(|e| format!("{name}: {e}"))

@@ -1,0 +1,198 @@
+//! `cargo xtask target`: the speed targets of the 826-block column (paper 5.2b, cover,
+//! r_tol 1, 1.0 s simulated) measured over an ensemble of trajectories.
+//!
+//! The column's collapse is chaotic: gravity changed in its twelfth digit draws another
+//! trajectory with up to 16% more steps (`docs/performance.md`), so one run's total is one
+//! draw from a spread. This task runs `--runs K` trajectories, gravity scaled by 1 + e for
+//! e = 0, +1e-12, -1e-12, +2e-12, -2e-12, ... (the first is the paper's scene itself), one
+//! at a time, and reports each run, the medians, and the seconds per OCI iteration, which
+//! hold steady from one trajectory to the next. Times are measured, never asserted.
+
+use crate::args;
+use crate::sweep::{self, Row, run_one};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// The issue's targets, seconds: the whole run, and contact detection within it.
+const TOTAL_TARGET_S: f64 = 5.0;
+/// See [`TOTAL_TARGET_S`].
+const DETECTION_TARGET_S: f64 = 0.5;
+
+/// Options of a target measurement.
+pub struct Options {
+    /// Trajectories to run.
+    pub runs: usize,
+    /// Block count of the paper's column to run (826 for the target itself).
+    pub model: usize,
+    /// Output directory, relative to the workspace root.
+    pub out: PathBuf,
+}
+
+/// Parses `--runs K --model N --out DIR`.
+pub fn parse(args: &[String]) -> Result<Options, String> {
+    let mut o = Options {
+        runs: 5,
+        model: 826,
+        out: PathBuf::from("runs/target"),
+    };
+    for (flag, value) in args::pairs(args)? {
+        match flag {
+            "--runs" => o.runs = args::positive_count(flag, value)? as usize,
+            "--model" => o.model = args::paper_column(flag, value)?,
+            "--out" => o.out = PathBuf::from(value),
+            other => return Err(format!("unknown option `{other}`")),
+        }
+    }
+    Ok(o)
+}
+
+/// The relative change of gravity of run `k`: 0, then +1, -1, +2, -2, ... times 1e-12.
+/// Far below anything the physics resolves, far above the rounding of 9.8 (2e-16).
+pub fn gravity_eps(k: usize) -> f64 {
+    let m = k.div_ceil(2) as f64;
+    let sign = if k % 2 == 1 { 1.0 } else { -1.0 };
+    if k == 0 { 0.0 } else { sign * m * 1e-12 }
+}
+
+/// Gravity's factor 1 + e, as the report writes it.
+fn factor(eps: f64) -> String {
+    match eps {
+        0.0 => "1".into(),
+        e if e > 0.0 => format!("1 + {e:e}"),
+        e => format!("1 - {:e}", -e),
+    }
+}
+
+/// The median of `v` (the mean of the middle two for an even count); NaN when empty.
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    match n {
+        0 => f64::NAN,
+        _ if n % 2 == 1 => v[n / 2],
+        _ => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+/// Milliseconds of the whole run per OCI iteration.
+fn ms_per_oci(r: &Row) -> f64 {
+    1e3 * r.total_s / r.oci_cycles.max(1) as f64
+}
+
+/// Runs the ensemble, writes `target.csv` and `target.md` and prints the report.
+pub fn run(root: &Path, o: &Options) -> Result<(), String> {
+    let out = root.join(&o.out);
+    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let mut runs = Vec::with_capacity(o.runs);
+    for k in 0..o.runs {
+        let eps = gravity_eps(k);
+        let row = run_one(o.model, "cover", 1.0, 5000, 1.0 + eps);
+        eprintln!(
+            "run {}/{} (gravity x {}): {} steps, {:.2} s",
+            k + 1,
+            o.runs,
+            factor(eps),
+            row.steps,
+            row.total_s
+        );
+        runs.push((eps, row));
+    }
+    let report = report(o, &runs);
+    // The sweep's columns, after the change of gravity.
+    let mut csv = format!("gravity_eps,{}\n", sweep::CSV_HEADER);
+    for (eps, r) in &runs {
+        let _ = writeln!(csv, "{eps:e},{}", sweep::csv_line(r));
+    }
+    for (name, text) in [("target.csv", csv), ("target.md", report.clone())] {
+        std::fs::write(out.join(name), text).map_err(|e| format!("{name}: {e}"))?;
+    }
+    println!("{report}");
+    println!("wrote {}", out.display());
+    Ok(())
+}
+
+/// The report: one table row per trajectory, then the medians against the targets.
+fn report(o: &Options, runs: &[(f64, Row)]) -> String {
+    let mut s = format!(
+        "# Speed targets over {} trajectories ({} blocks, cover, r_tol 1)\n\n\
+         | gravity x | steps | OCI | detection (s) | total (s) | ms per OCI | permissible |\n\
+         |---|---:|---:|---:|---:|---:|---|\n",
+        runs.len(),
+        o.model
+    );
+    for (eps, r) in runs {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {:.3} | {:.2} | {:.3} | {} |",
+            factor(*eps),
+            r.steps,
+            r.oci_cycles,
+            r.detection_s,
+            r.total_s,
+            ms_per_oci(r),
+            if r.verdict { "yes" } else { "**no**" }
+        );
+    }
+    let med = |f: fn(&Row) -> f64| median(runs.iter().map(|(_, r)| f(r)).collect());
+    let (total, detection, ms, oci) = (
+        med(|r| r.total_s),
+        med(|r| r.detection_s),
+        med(ms_per_oci),
+        med(|r| r.oci_cycles as f64),
+    );
+    let _ = write!(
+        s,
+        "\nMedians: total {total:.2} s, detection {detection:.3} s, {ms:.3} ms per OCI \
+         iteration over {oci:.0} OCI iterations."
+    );
+    if o.model == 826 {
+        let _ = write!(
+            s,
+            " Targets: total under {TOTAL_TARGET_S} s, detection under {DETECTION_TARGET_S} s; \
+             at the median OCI count the total needs {:.3} ms per OCI iteration.",
+            1e3 * TOTAL_TARGET_S / oci
+        );
+    }
+    s.push_str(" Measured on this machine, not asserted.\n");
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{gravity_eps, median, parse};
+
+    #[test]
+    fn perturbations_alternate_in_sign_and_grow() {
+        let e: Vec<f64> = (0..5).map(gravity_eps).collect();
+        assert_eq!(e, [0.0, 1e-12, -1e-12, 2e-12, -2e-12]);
+    }
+
+    #[test]
+    fn median_of_odd_and_even_counts() {
+        assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(vec![4.0, 1.0, 3.0, 2.0]), 2.5);
+        assert!(median(Vec::new()).is_nan());
+    }
+
+    #[test]
+    fn bad_options_are_named() {
+        let args = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        assert!(
+            parse(&args(&["--runs", "0"]))
+                .err()
+                .is_some_and(|e| e.contains("--runs"))
+        );
+        assert!(
+            parse(&args(&["--model", "7"]))
+                .err()
+                .is_some_and(|e| e.contains("`7`"))
+        );
+        assert!(
+            parse(&args(&["--runs"]))
+                .err()
+                .is_some_and(|e| e.contains("needs a value"))
+        );
+        let o = parse(&args(&["--runs", "3", "--model", "20"])).expect("valid");
+        assert_eq!((o.runs, o.model), (3, 20));
+    }
+}
