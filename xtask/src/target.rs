@@ -159,7 +159,41 @@ fn report(o: &Options, runs: &[(f64, Row)]) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::{gravity_eps, median, parse};
+    use super::{Options, gravity_eps, median, parse, run};
+    use std::path::PathBuf;
+
+    /// Two trajectories of the 20-block column: one CSV row and one table row each, the
+    /// first with gravity unchanged, and the medians after the table.
+    #[test]
+    fn an_ensemble_writes_a_row_per_trajectory() {
+        let dir = std::env::temp_dir().join(format!("dda-target-{}", std::process::id()));
+        let o = Options {
+            runs: 2,
+            model: 20,
+            out: PathBuf::from(&dir),
+        };
+        run(&dir, &o).expect("runs");
+        let csv = std::fs::read_to_string(dir.join("target.csv")).expect("csv");
+        let md = std::fs::read_to_string(dir.join("target.md")).expect("md");
+        std::fs::remove_dir_all(&dir).ok();
+        let lines: Vec<&str> = csv.lines().collect();
+        assert_eq!(lines.len(), 3, "{csv}");
+        assert!(lines[0].starts_with("gravity_eps,model,detector,r_tol,steps"));
+        assert!(lines[1].starts_with("0e0,20,cover,1,"), "{}", lines[1]);
+        assert!(lines[2].starts_with("1e-12,20,cover,1,"), "{}", lines[2]);
+        assert!(
+            lines[1..].iter().all(|l| l.contains(",permissible,")),
+            "{csv}"
+        );
+        assert_eq!(
+            md.lines().filter(|l| l.starts_with("| 1")).count(),
+            2,
+            "{md}"
+        );
+        assert!(md.contains("Medians: total"), "{md}");
+        // The 5 s and 0.5 s targets are the 826-block column's, not this one's.
+        assert!(!md.contains("Targets"), "{md}");
+    }
 
     #[test]
     fn perturbations_alternate_in_sign_and_grow() {
