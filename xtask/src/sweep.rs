@@ -67,6 +67,10 @@ pub struct Options {
     pub out: PathBuf,
 }
 
+/// Steps after which a run is stopped and counted as not permissible, unless
+/// `--max-steps` says otherwise (nearly four times the paper's longest run).
+pub const MAX_STEPS: u64 = 5000;
+
 /// Parses `--models 20,93 --detectors cover --rtol 1,2 --jobs N --out DIR`.
 pub fn parse(args: &[String]) -> Result<Options, String> {
     let mut o = Options {
@@ -74,7 +78,7 @@ pub fn parse(args: &[String]) -> Result<Options, String> {
         detectors: vec!["cover".into(), "type-1".into(), "type-2".into()],
         rtols: vec![1.0, 2.0, 4.0, 6.0, 8.0, 10.0],
         jobs: 1,
-        max_steps: 5000,
+        max_steps: MAX_STEPS,
         out: PathBuf::from("runs/sweep"),
     };
     let list = |v: &str| -> Vec<String> { v.split(',').map(|s| s.trim().to_string()).collect() };

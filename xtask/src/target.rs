@@ -86,7 +86,7 @@ pub fn run(root: &Path, o: &Options) -> Result<(), String> {
     let mut runs = Vec::with_capacity(o.runs);
     for k in 0..o.runs {
         let eps = gravity_eps(k);
-        let row = run_one(o.model, "cover", 1.0, 5000, 1.0 + eps);
+        let row = run_one(o.model, "cover", 1.0, sweep::MAX_STEPS, 1.0 + eps);
         eprintln!(
             "run {}/{} (gravity x {}): {} steps, {:.2} s",
             k + 1,
@@ -103,7 +103,7 @@ pub fn run(root: &Path, o: &Options) -> Result<(), String> {
     for (eps, r) in &runs {
         let _ = writeln!(csv, "{eps:e},{}", sweep::csv_line(r));
     }
-    for (name, text) in [("target.csv", csv), ("target.md", report.clone())] {
+    for (name, text) in [("target.csv", &csv), ("target.md", &report)] {
         std::fs::write(out.join(name), text).map_err(|e| format!("{name}: {e}"))?;
     }
     println!("{report}");
