@@ -32,6 +32,10 @@ pub struct Row {
     pub steps: u64,
     /// OCI iterations (cycles).
     pub oci_cycles: u64,
+    /// Numeric factorisations of the global matrix.
+    pub factorisations: u64,
+    /// Solves through a low-rank update of a factor.
+    pub low_rank_solves: u64,
     /// Wall seconds in contact detection.
     pub detection_s: f64,
     /// Wall seconds in assembly.
@@ -138,6 +142,8 @@ pub fn run_one(
         r_tol,
         steps: 0,
         oci_cycles: 0,
+        factorisations: 0,
+        low_rank_solves: 0,
         detection_s: 0.0,
         assembly_s: 0.0,
         solve_s: 0.0,
@@ -188,6 +194,7 @@ pub fn run_one(
     let t = sim.totals();
     row.steps = t.steps;
     row.oci_cycles = t.oci_iterations;
+    (_, row.factorisations, row.low_rank_solves) = sim.factorisations();
     row.detection_s = t.detection_s;
     row.assembly_s = t.assembly_s;
     row.solve_s = t.solve_s;

@@ -6,7 +6,9 @@
 //! draw from a spread. This task runs `--runs K` trajectories, gravity scaled by 1 + e for
 //! e = 0, +1e-12, -1e-12, +2e-12, -2e-12, ... (the first is the paper's scene itself), one
 //! at a time, and reports each run, the medians, and the seconds per OCI iteration, which
-//! hold steady from one trajectory to the next. Times are measured, never asserted.
+//! hold steady from one trajectory to the next, with the counts of OCI iterations and
+//! factorisations: the work, which the machine's drift does not move. Times are
+//! measured, never asserted.
 
 use crate::args;
 use crate::sweep::{self, Row, run_one};
@@ -98,10 +100,19 @@ pub fn run(root: &Path, o: &Options) -> Result<(), String> {
         runs.push((eps, row));
     }
     let report = report(o, &runs);
-    // The sweep's columns, after the change of gravity.
-    let mut csv = format!("gravity_eps,{}\n", sweep::CSV_HEADER);
+    // The sweep's columns, after the change of gravity, then the solver's work.
+    let mut csv = format!(
+        "gravity_eps,{},factorisations,low_rank_solves\n",
+        sweep::CSV_HEADER
+    );
     for (eps, r) in &runs {
-        let _ = writeln!(csv, "{eps:e},{}", sweep::csv_line(r));
+        let _ = writeln!(
+            csv,
+            "{eps:e},{},{},{}",
+            sweep::csv_line(r),
+            r.factorisations,
+            r.low_rank_solves
+        );
     }
     for (name, text) in [("target.csv", &csv), ("target.md", &report)] {
         std::fs::write(out.join(name), text).map_err(|e| format!("{name}: {e}"))?;
@@ -115,18 +126,19 @@ pub fn run(root: &Path, o: &Options) -> Result<(), String> {
 fn report(o: &Options, runs: &[(f64, Row)]) -> String {
     let mut s = format!(
         "# Speed targets over {} trajectories ({} blocks, cover, r_tol 1)\n\n\
-         | gravity x | steps | OCI | detection (s) | total (s) | ms per OCI | permissible |\n\
-         |---|---:|---:|---:|---:|---:|---|\n",
+         | gravity x | steps | OCI | factorisations | detection (s) | total (s) | ms per OCI | permissible |\n\
+         |---|---:|---:|---:|---:|---:|---:|---|\n",
         runs.len(),
         o.model
     );
     for (eps, r) in runs {
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {:.3} | {:.2} | {:.3} | {} |",
+            "| {} | {} | {} | {} | {:.3} | {:.2} | {:.3} | {} |",
             factor(*eps),
             r.steps,
             r.oci_cycles,
+            r.factorisations,
             r.detection_s,
             r.total_s,
             ms_per_oci(r),
@@ -134,16 +146,17 @@ fn report(o: &Options, runs: &[(f64, Row)]) -> String {
         );
     }
     let med = |f: fn(&Row) -> f64| median(runs.iter().map(|(_, r)| f(r)).collect());
-    let (total, detection, ms, oci) = (
+    let (total, detection, ms, oci, factorisations) = (
         med(|r| r.total_s),
         med(|r| r.detection_s),
         med(ms_per_oci),
         med(|r| r.oci_cycles as f64),
+        med(|r| r.factorisations as f64),
     );
     let _ = write!(
         s,
         "\nMedians: total {total:.2} s, detection {detection:.3} s, {ms:.3} ms per OCI \
-         iteration over {oci:.0} OCI iterations."
+         iteration over {oci:.0} OCI iterations and {factorisations:.0} factorisations."
     );
     if o.model == 826 {
         let _ = write!(
@@ -185,6 +198,19 @@ mod tests {
             lines[1..].iter().all(|l| l.contains(",permissible,")),
             "{csv}"
         );
+        // Every attempt's first OCI iteration factorises, so each run has at least as
+        // many factorisations as steps; the solver's work ends each row.
+        assert!(
+            lines[0].ends_with(",factorisations,low_rank_solves"),
+            "{}",
+            lines[0]
+        );
+        for l in &lines[1..] {
+            let cells: Vec<&str> = l.split(',').collect();
+            let steps: u64 = cells[4].parse().expect("steps");
+            let f: u64 = cells[cells.len() - 2].parse().expect("factorisations");
+            assert!(f >= steps && steps > 0, "{l}");
+        }
         assert_eq!(
             md.lines().filter(|l| l.starts_with("| 1")).count(),
             2,
