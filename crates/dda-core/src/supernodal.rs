@@ -148,19 +148,27 @@ impl<'a> Factor<'a> {
         }
     }
 
-    /// x <- L^-T x (the backward sweep over every supernode).
+    /// x <- L^-T x (the backward sweep over every supernode). In each supernode the
+    /// products of its columns with the pattern rows come first: those rows are final
+    /// values of ancestors, so the products are independent of each other and can
+    /// overlap in the processor. The short triangular chain of the diagonal block comes
+    /// after. Measured (`column_step/resolve`, both sweeps): 3,472 blocks 4.98-5.12 ms
+    /// against 6.26-6.75 ms with each column's product over its whole height in the
+    /// chain; 10,131 blocks 24.0-24.6 against 24.8-26.7 ms; 826 blocks no change.
     pub(crate) fn backward(&self, x: &mut [f64], g: &mut Vec<f64>) {
         for s in (0..self.sym.n_supernodes()).rev() {
             let node = self.node(s);
             let (c, rows) = (node.ncols, node.ncols + node.pattern.len());
             g.clear();
-            g.extend_from_slice(&x[node.start..node.start + c]);
             g.extend(node.pattern.iter().map(|&r| x[r]));
-            for j in (0..c).rev() {
-                let col = &node.values[j * rows..(j + 1) * rows];
-                g[j] = (g[j] - dot(&g[j + 1..], &col[j + 1..])) / col[j];
+            let top = &mut x[node.start..node.start + c];
+            for (j, t) in top.iter_mut().enumerate() {
+                *t -= dot(&node.values[j * rows + c..(j + 1) * rows], g);
             }
-            x[node.start..node.start + c].copy_from_slice(&g[..c]);
+            for j in (0..c).rev() {
+                let col = &node.values[j * rows..j * rows + c];
+                top[j] = (top[j] - dot(&top[j + 1..], &col[j + 1..])) / col[j];
+            }
         }
     }
 
