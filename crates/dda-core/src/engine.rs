@@ -25,8 +25,9 @@
 //!   redone with dt / 3; if the largest vertex displacement exceeds d_max or the largest
 //!   rotation exceeds theta_max, with dt scaled down in proportion. After an easy step
 //!   (OCI in at most two thirds of the bound, [`easy_oci`]; displacement under half of
-//!   d_max) dt grows by 1.25, never past the initial step. The last step is shortened to land on `duration`.
-//!   These factors are our choice: DESIGN 3 and the paper fix only the criteria.
+//!   d_max) dt grows by 1.25, never past the initial step. The last step is shortened to
+//!   land on `duration`. These factors are our choice: DESIGN 3 and the paper fix only
+//!   the criteria.
 //! - Update: vertices move by T D with the rotation applied exactly; stresses accumulate
 //!   C (ex, ey, gxy); velocities V <- 2 D / dt - V (dynamic) or 0 (static).
 
