@@ -76,8 +76,12 @@ fn extent(a: &ConvexPolygon, b: &ConvexPolygon) -> f64 {
 proptest! {
     #![proptest_config(ProptestConfig { cases: 512, ..ProptestConfig::default() })]
 
-    /// Distance and penetration depth agree with parry2d-f64 (and with SAT) to 1e-9
-    /// relative, 1e-12 absolute.
+    /// Distance agrees with parry2d-f64 (GJK) and penetration depth with the separating-axis
+    /// computation (exact for convex polygons), to 1e-9 relative, 1e-12 absolute. parry's
+    /// depth comes from EPA, which grows a polygon inside the Minkowski difference: the
+    /// distance to its nearest face is a lower bound on the depth, reached only if EPA runs
+    /// to the end. On a 1-degree sliver it can stop early (saved case b311ba3d: parry
+    /// 0.193, SAT and ours 0.326), so parry's depth is checked as that bound.
     #[test]
     fn signed_distance_matches_parry((a, b) in near_pair()) {
         let ours = signed_distance(&a, &b).distance;
@@ -97,8 +101,8 @@ proptest! {
             let contact = query::contact(&id, &pa, &id, &pb, 0.0)
                 .expect("supported")
                 .expect("overlapping shapes are in contact");
-            prop_assert!((ours - contact.dist).abs() <= tol(contact.dist),
-                "depth: ours {ours} parry {}", contact.dist);
+            prop_assert!(-contact.dist <= depth + tol(depth),
+                "depth: ours {ours} parry {} beyond SAT", contact.dist);
         }
     }
 
