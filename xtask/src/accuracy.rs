@@ -183,8 +183,22 @@ pub fn run(out: &Path) -> Result<(), String> {
         "### Reading (2026-11-21)\n\n\
          - Free fall: the constant-acceleration scheme is exact for a constant force; the\n  \
          error is rounding whatever the setting, and d_max only buys steps.\n\
-         - Incline: errors of 1e-4 or less, except with a soft penalty (1e7 N/m), where the\n  \
-         springs take long to carry the weight and friction lags behind N tan(phi).\n\
+         - Incline: the error is not monotone in d_max (3.2e-3 at 1 mm, 6.8e-5 at 0.5 mm and\n  \
+         4.8e-5 at 5 mm). The slider starts on the slope with its springs unloaded, so its\n  \
+         two normal springs (2 p in all) ring at omega = sqrt(2 p / m), 877 rad/s at\n  \
+         p = 1e9 N/m and m = 2600 kg, a period of about one first step. Friction follows N\n  \
+         and rings with it, so the slider's velocity error swings within\n  \
+         tan(phi) g cos(theta) / omega = 3.5e-3 m/s. The ringing dies within the first steps\n  \
+         (we believe at the open-close iteration: a spring loaded from zero swings back to\n  \
+         zero force, where it opens), and the error is frozen wherever the ring stopped: in the d_max runs, from -3.2e-3 to +3e-5 m/s, so\n  \
+         a relative error at 1 s (0.906 m travelled) anywhere up to 3.9e-3, depending on\n  \
+         where the first d_max cut fell. With dt0 = 1 ms the frozen error was -1.07e-3 m/s\n  \
+         for every d_max from 0.5 to 5 mm (traced once, 2026-11-21). The bound falls as\n  \
+         1 / sqrt(p): 1.2e-3 and 3.9e-4 relative at 1e10 and 1e11 N/m, where the errors are\n  \
+         1.2e-4 and 1.5e-4. With a soft penalty (1e7 N/m) the springs also take long to\n  \
+         carry the weight, and friction lags behind N tan(phi). A block set down on a\n  \
+         surface with unloaded springs gets this transient; a user who needs the slide to\n  \
+         millimetres should start it pressed in by its weight or use a stiffer penalty.\n\
          - Rebound: the open-close iteration loses much of the energy of an impact. A\n  \
          contact carries its spring over whole steps and drops it, with the energy it\n  \
          holds, the step it opens; the stiffer the spring against the step (the contact\n  \
