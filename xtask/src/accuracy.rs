@@ -190,9 +190,10 @@ pub fn run(out: &Path) -> Result<(), String> {
          and rings with it, so the slider's velocity error swings within\n  \
          tan(phi) g cos(theta) / omega = 3.5e-3 m/s. The ringing dies within the first steps\n  \
          (we believe at the open-close iteration: a spring loaded from zero swings back to\n  \
-         zero force, where it opens), and the error is frozen wherever the ring stopped: in the d_max runs, from -3.2e-3 to +3e-5 m/s, so\n  \
-         a relative error at 1 s (0.906 m travelled) anywhere up to 3.9e-3, depending on\n  \
-         where the first d_max cut fell. With dt0 = 1 ms the frozen error was -1.07e-3 m/s\n  \
+         zero force, where it opens), and the error is frozen wherever the ring stopped.\n  \
+         In the d_max runs it froze between -3.2e-3 and +3e-5 m/s, a relative error at 1 s\n  \
+         (0.906 m travelled) anywhere up to 3.9e-3, depending on where the first d_max cut\n  \
+         fell. With dt0 = 1 ms the frozen error was -1.07e-3 m/s\n  \
          for every d_max from 0.5 to 5 mm (traced once, 2026-11-21). The bound falls as\n  \
          1 / sqrt(p): 1.2e-3 and 3.9e-4 relative at 1e10 and 1e11 N/m, where the errors are\n  \
          1.2e-4 and 1.5e-4. With a soft penalty (1e7 N/m) the springs also take long to\n  \

@@ -799,10 +799,7 @@ impl Simulation {
                     if landing {
                         self.t = duration;
                     } else {
-                        self.dt = dt;
-                        if growth > 1.0 {
-                            self.dt = (dt * growth).min(dt0);
-                        }
+                        self.dt = (dt * growth).min(dt0);
                     }
                     break;
                 }
