@@ -308,8 +308,14 @@ pub fn step_growth(
     if iterations > easy_oci(max_oci) {
         return 1.0;
     }
-    let room = (d_max / disp.max(f64::MIN_POSITIVE)).min(theta_max / rot.max(f64::MIN_POSITIVE));
-    (GROWTH_TARGET * room).clamp(1.0, MAX_GROWTH)
+    (GROWTH_TARGET * motion_room(disp, rot, d_max, theta_max)).clamp(1.0, MAX_GROWTH)
+}
+
+/// How many times a step's largest displacement `disp` and rotation `rot` fit within
+/// `d_max` and `theta_max` (the smaller ratio): below 1 the step moved too far, and dt
+/// scales by it either way, down after a cut and up in [`step_growth`].
+fn motion_room(disp: f64, rot: f64, d_max: f64, theta_max: f64) -> f64 {
+    (d_max / disp.max(f64::MIN_POSITIVE)).min(theta_max / rot.max(f64::MIN_POSITIVE))
 }
 
 /// Floor of the time step, relative to the initial step: below it the run stops.
@@ -803,7 +809,7 @@ impl Simulation {
                     }
                     break;
                 }
-                let ratio = (d_max / disp).min(theta_max / rot.max(f64::MIN_POSITIVE));
+                let ratio = motion_room(disp, rot, d_max, theta_max);
                 dt *= (0.9 * ratio).clamp(0.1, 0.9);
                 reason = "step displacement above d_max or rotation above theta_max";
             } else {
