@@ -329,9 +329,9 @@ const DT_FLOOR: f64 = 1e-9;
 /// factorisation costs about 2.7 ms; beyond about 100 terms the capacitance matrix and
 /// the Gram products of the new columns cost as much). With full solves per column it
 /// had been 1.85 ms at 24 and 2.02 at 64. Measured again after the dt growth rule: a
-/// low-rank solve of rank 100-149 costs 1.25 ms and one of 150-199 2.41 ms, against
-/// about 2.7 ms for a factorisation with its assembly; at a bound of 200 the run saved
-/// 302 factorisations and lost more in low-rank solves (`docs/performance.md`).
+/// low-rank solve of rank 100-149 costs 1.25 ms and one of 150-199 2.41 ms; at a bound
+/// of 200 the run saved 302 factorisations and lost more in low-rank solves
+/// (`docs/performance.md`).
 const MAX_RANK: usize = 96;
 
 /// How near (in d_tol, by separating-axis gap) two free blocks must be for a new matrix
