@@ -1,12 +1,30 @@
 //! Random convex polygons for property tests, shared by the crates' test suites:
 //! ellipse polygons (3 to 64 vertices, aspect up to 100), sliver wedges (tip angles down
 //! to 1 degree) and chamfered polygons (edges down to 1e-4 of the size), placed at random
-//! and given clockwise or counter-clockwise.
+//! and given clockwise or counter-clockwise; and the property tests' configuration.
 #![allow(dead_code)]
 
 use dda_geom::{ConvexPolygon, DVec2};
 use proptest::prelude::*;
+use proptest::test_runner::RngSeed;
 use std::f64::consts::TAU;
+
+/// The seed the property tests draw their cases from unless `PROPTEST_RNG_SEED` is set.
+pub const SEED: u64 = 20261121;
+
+/// Proptest's configuration for `cases` cases, drawn from [`SEED`] so that every run of
+/// the test command, CI's included, checks the same cases (and a failure repeats);
+/// `PROPTEST_RNG_SEED=N cargo test` draws other cases.
+pub fn config(cases: u32) -> ProptestConfig {
+    let mut c = ProptestConfig {
+        cases,
+        ..ProptestConfig::default()
+    };
+    if std::env::var_os("PROPTEST_RNG_SEED").is_none() {
+        c.rng_seed = RngSeed::Fixed(SEED);
+    }
+    c
+}
 
 /// A random convex polygon of unit size: one of an ellipse polygon (3 to 64 vertices,
 /// aspect up to 100), a sliver wedge (tip 1 to 20 degrees) or a chamfered polygon

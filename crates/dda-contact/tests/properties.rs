@@ -60,7 +60,7 @@ fn mirror(k: ContactKey) -> ContactKey {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 512, ..ProptestConfig::default() })]
+    #![proptest_config(polygons::config(512))]
 
     /// d_RE2 (eq. 11) is the signed distance whenever the blocks overlap or the nearest
     /// feature pair is a vertex-edge pair (its foot inside the edge); it is never above it
@@ -117,7 +117,7 @@ proptest! {
 
 proptest! {
     // Each case is a brute-force O(N^2) reference over up to 5,000 boxes: fewer cases.
-    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+    #![proptest_config(polygons::config(48))]
 
     /// Neighbour search finds exactly the brute-force pairs on random scenes of boxes.
     #[test]
@@ -230,7 +230,7 @@ fn track_by_scan(
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+    #![proptest_config(polygons::config(24))]
 
     /// Over two open-close iterations with random block motions (the second after the
     /// first one's activations), tracking through the list made at step start activates

@@ -74,7 +74,7 @@ fn extent(a: &ConvexPolygon, b: &ConvexPolygon) -> f64 {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 512, ..ProptestConfig::default() })]
+    #![proptest_config(polygons::config(512))]
 
     /// Distance agrees with parry2d-f64 (GJK) and penetration depth with the separating-axis
     /// computation (exact for convex polygons), to 1e-9 relative, 1e-12 absolute. parry's
