@@ -31,7 +31,7 @@ fn main() -> ExitCode {
     match task.as_deref() {
         None | Some("help" | "--help" | "-h") => {
             println!(
-                "usage: cargo xtask <task>\n\ntasks:\n  robustness   section 4 cases x detectors -> docs/robustness.md\n  scaling [--blocks 826,3300,10000,30000,100000] [--duration 0.1] [--out DIR] [--write-scenes DIR]   time per step against blocks -> docs/scaling.md (or the columns as scene files)\n  accuracy [--out DIR]   error against wall time; the columns' penetration and energy -> docs/accuracy.md\n  sweep [--models 20,93,229,826] [--detectors cover,type-1,type-2] [--rtol 1,2,4,6,8,10] [--jobs N] [--max-steps N] [--out DIR]\n  target [--runs 5] [--model 826] [--out DIR]   the 5.2b column's speed targets over perturbed trajectories (medians, ms per OCI iteration)"
+                "usage: cargo xtask <task>\n\ntasks:\n  robustness   section 4 cases x detectors -> docs/robustness.md\n  scaling [--blocks 826,3300,10000,30000,100000] [--duration 0.1] [--out DIR] [--write-scenes DIR]   time per step against blocks -> docs/scaling.md (or the columns as scene files)\n  accuracy [--out DIR]   error against wall time; the columns' penetration and energy -> docs/accuracy.md\n  sweep [--models 20,93,229,826] [--detectors cover,type-1,type-2] [--rtol 1,2,4,6,8,10] [--jobs N] [--max-steps N] [--out DIR]\n  target [--runs 5] [--repeat 1] [--model 826] [--out DIR]   the 5.2b column's speed targets over perturbed trajectories (medians, ms per OCI iteration; with --repeat R each trajectory's fastest of R runs)"
             );
             ExitCode::SUCCESS
         }
