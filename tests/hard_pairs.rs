@@ -43,10 +43,11 @@
 //! `a_wedge_rocking_deep_in_a_plate_creates_no_energy` and
 //! `a_block_spinning_in_contact_creates_no_energy`.
 //!
-//! The properties run a fixed sample of 256 cases each (seeded: `polygons::config`), so
-//! that CI sees the same cases every run. Wider samples are drawn outside CI: 10,000 pairs over the whole range
-//! (`pair()` with a deterministic runner, every penalty) all kept the energy within 1% and
-//! the overlap bound once contact rows were linearised at the step's predicted midpoint
+//! The properties run a fixed sample of 256 cases each (seeded: `polygons::config`;
+//! `PROPTEST_RNG_SEED` draws another), so that CI sees the same cases every run. Wider
+//! samples are drawn outside CI: 10,000 pairs over the whole range (`pair()` with a
+//! deterministic runner, every penalty) all kept the energy within 1% and the overlap
+//! bound once contact rows were linearised at the step's predicted midpoint
 //! (`dda_core::springs`); with the step-start rows, 2 of the first 4,000 created energy.
 
 #![allow(clippy::unwrap_used)]
