@@ -83,12 +83,21 @@ fn main() -> ExitCode {
         }
         Some("target") => {
             let args: Vec<String> = std::env::args().skip(2).collect();
-            match target::parse(&args).and_then(|o| target::run(&root(), &o)) {
-                Ok(()) => ExitCode::SUCCESS,
+            // Bad options exit 2; a measurement that cannot be made or repeated (a
+            // trajectory whose repeats differ, an output that cannot be written) exits 1,
+            // as `dda run` does for a simulation that cannot go on.
+            match target::parse(&args) {
                 Err(e) => {
                     eprintln!("xtask target: {e}");
                     ExitCode::from(2)
                 }
+                Ok(o) => match target::run(&root(), &o) {
+                    Ok(()) => ExitCode::SUCCESS,
+                    Err(e) => {
+                        eprintln!("xtask target: {e}");
+                        ExitCode::from(1)
+                    }
+                },
             }
         }
         Some(other) => {
