@@ -278,21 +278,28 @@ mod tests {
     use super::{Options, gravity_eps, median, parse, run};
     use std::path::PathBuf;
 
+    /// Runs two trajectories of the 20-block column, `repeat` times each, in a temporary
+    /// directory; returns `target.csv` and `target.md`.
+    fn two_trajectories(repeat: usize) -> (String, String) {
+        let dir = std::env::temp_dir().join(format!("dda-target-{repeat}-{}", std::process::id()));
+        let o = Options {
+            runs: 2,
+            repeat,
+            model: 20,
+            out: PathBuf::from(&dir),
+        };
+        run(&dir, &o).expect("runs, the repeats doing the same work");
+        let csv = std::fs::read_to_string(dir.join("target.csv")).expect("csv");
+        let md = std::fs::read_to_string(dir.join("target.md")).expect("md");
+        std::fs::remove_dir_all(&dir).ok();
+        (csv, md)
+    }
+
     /// Two trajectories of the 20-block column: one CSV row and one table row each, the
     /// first with gravity unchanged, and the medians after the table.
     #[test]
     fn an_ensemble_writes_a_row_per_trajectory() {
-        let dir = std::env::temp_dir().join(format!("dda-target-{}", std::process::id()));
-        let o = Options {
-            runs: 2,
-            repeat: 1,
-            model: 20,
-            out: PathBuf::from(&dir),
-        };
-        run(&dir, &o).expect("runs");
-        let csv = std::fs::read_to_string(dir.join("target.csv")).expect("csv");
-        let md = std::fs::read_to_string(dir.join("target.md")).expect("md");
-        std::fs::remove_dir_all(&dir).ok();
+        let (csv, md) = two_trajectories(1);
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(lines.len(), 3, "{csv}");
         assert!(lines[0].starts_with("gravity_eps,model,detector,r_tol,steps"));
@@ -330,17 +337,7 @@ mod tests {
     /// than the median of the two, and the report says so.
     #[test]
     fn repeats_report_the_fastest_and_the_median() {
-        let dir = std::env::temp_dir().join(format!("dda-target-rep-{}", std::process::id()));
-        let o = Options {
-            runs: 2,
-            repeat: 2,
-            model: 20,
-            out: PathBuf::from(&dir),
-        };
-        run(&dir, &o).expect("runs, the repeats doing the same work");
-        let csv = std::fs::read_to_string(dir.join("target.csv")).expect("csv");
-        let md = std::fs::read_to_string(dir.join("target.md")).expect("md");
-        std::fs::remove_dir_all(&dir).ok();
+        let (csv, md) = two_trajectories(2);
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(lines.len(), 3, "{csv}");
         let header: Vec<&str> = lines[0].split(',').collect();
