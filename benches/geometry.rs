@@ -46,7 +46,7 @@ fn pairs(n: usize) -> Vec<(ConvexPolygon, ConvexPolygon)> {
         .map(|k| {
             let a = random_polygon(&mut rng, n, DVec2::ZERO);
             // Half the pairs apart (centres 3 apart), half overlapping (centres 1 apart).
-            let dist = if k % 2 == 0 { 3.0 } else { 1.0 };
+            let dist = if k.is_multiple_of(2) { 3.0 } else { 1.0 };
             let dir = DVec2::from_angle(rng.next_f64() * std::f64::consts::TAU);
             let b = random_polygon(&mut rng, n, dir * dist);
             (a, b)

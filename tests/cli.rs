@@ -34,6 +34,32 @@ fn scratch(name: &str) -> PathBuf {
     d
 }
 
+/// Writes the test scene with each `(from, to)` replaced (every `from` must be there)
+/// into `dir/name`, and returns its path.
+fn variant(dir: &Path, name: &str, changes: &[(&str, &str)]) -> PathBuf {
+    let mut text = std::fs::read_to_string(SCENE).unwrap();
+    for (from, to) in changes {
+        assert!(text.contains(from), "{from}");
+        text = text.replace(from, to);
+    }
+    let file = dir.join(name);
+    std::fs::write(&file, text).unwrap();
+    file
+}
+
+/// `dda run FILE --out OUT --quiet` with `extra` arguments.
+fn run_file(file: &Path, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "run",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ];
+    args.extend_from_slice(extra);
+    dda(&args)
+}
+
 fn summary(dir: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
 }
@@ -232,19 +258,13 @@ fn check_and_scenes() {
 #[test]
 fn failed_simulation_exits_1_and_keeps_last_good_state() {
     let dir = scratch("fail");
-    let text = std::fs::read_to_string(SCENE)
-        .unwrap()
-        .replace("frames = 2", "frames = 2\nmax_oci = 1");
-    let scene = dir.join("fail.toml");
-    std::fs::write(&scene, text).unwrap();
+    let scene = variant(
+        &dir,
+        "fail.toml",
+        &[("frames = 2", "frames = 2\nmax_oci = 1")],
+    );
     let out = dir.join("out");
-    let o = dda(&[
-        "run",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let o = run_file(&scene, &out, &[]);
     assert_eq!(
         o.status.code(),
         Some(1),
@@ -371,7 +391,8 @@ fn killed_run_resumes_to_the_uninterrupted_result() {
         let alive = child.try_wait().unwrap().is_none();
         child.kill().unwrap_or(()); // SIGKILL on Unix
         child.wait().unwrap();
-        if alive {
+        // Killed after it moved its results into place, the run had finished.
+        if alive && !out.exists() {
             killed = Some((out, work, delay));
             break;
         }
@@ -380,7 +401,7 @@ fn killed_run_resumes_to_the_uninterrupted_result() {
     let ck_path = work.join("checkpoint.bin");
     let ck = dda_core::Checkpoint::load(&ck_path)
         .unwrap_or_else(|e| panic!("killed {delay} ms after the first checkpoint: {e}"));
-    assert!(ck.state.totals.steps % 3 == 0 && ck.state.totals.steps > 0);
+    assert!(ck.state.totals.steps.is_multiple_of(3) && ck.state.totals.steps > 0);
     assert!(!out.exists(), "an interrupted run is not moved into place");
 
     // Damaged copies are refused with the reason, and nothing is written.
@@ -400,7 +421,7 @@ fn killed_run_resumes_to_the_uninterrupted_result() {
     ] {
         let copy_work = dir.join(format!(".{name}.partial"));
         std::fs::create_dir_all(&copy_work).unwrap();
-        for f in ["history.csv", "frames.jsonl", "scene.json"] {
+        for f in ["history.csv", "frames.jsonl", "scene.json", ".dda-run"] {
             std::fs::copy(work.join(f), copy_work.join(f)).unwrap();
         }
         std::fs::write(copy_work.join("checkpoint.bin"), bytes).unwrap();
@@ -461,32 +482,573 @@ fn warnings_name_file_and_line() {
     assert!(err.contains(&format!("warn.toml:{line}")), "{err}");
 }
 
-/// A penalty too soft for the contact tolerance (paper section 2.6) gets a warning after
-/// the run, exactly when the summary's largest penetration exceeds the tolerance.
+/// A penalty too soft for the contact tolerance (paper section 2.6) lets a contact
+/// penetrate beyond d_tol: the run stops there (exit 1) with a diagnosis naming the
+/// contact's blocks and the last good state; `--keep-going` goes on and records the
+/// violation in summary.json's `warnings`. A penalty stiff enough runs through.
 #[test]
-fn a_penalty_too_soft_for_the_tolerance_is_warned_of() {
+fn a_penetration_beyond_the_tolerance_stops_the_run_unless_keep_going() {
     let dir = scratch("soft-penalty");
     for (penalty, name) in [("1e9", "stiff"), ("2e6", "soft")] {
-        let text = std::fs::read_to_string(SCENE).unwrap().replace(
-            "normal_penalty = 1e9",
-            &format!("normal_penalty = {penalty}"),
+        let penalty = format!("normal_penalty = {penalty}");
+        let file = variant(
+            &dir,
+            &format!("{name}.toml"),
+            &[("normal_penalty = 1e9", &penalty)],
         );
-        let file = dir.join(format!("{name}.toml"));
-        std::fs::write(&file, &text).unwrap();
-        let out = dir.join(name);
-        let o = dda(&[
+        for keep_going in [false, true] {
+            let out = dir.join(format!("{name}-{keep_going}"));
+            let o = run_file(
+                &file,
+                &out,
+                if keep_going { &["--keep-going"] } else { &[] },
+            );
+            let err = String::from_utf8_lossy(&o.stderr);
+            let s = summary(&out);
+            let deeper =
+                s["max_penetration"].as_f64().unwrap() > s["contact_tolerance"].as_f64().unwrap();
+            let warned = s["warnings"].as_array().is_some_and(|w| !w.is_empty());
+            match (name, keep_going) {
+                ("stiff", _) => {
+                    assert!(o.status.success(), "{err}");
+                    assert!(!deeper && !warned, "{s}");
+                }
+                ("soft", false) => {
+                    assert_eq!(o.status.code(), Some(1), "{err}");
+                    assert_eq!(s["status"], "failed");
+                    assert!(
+                        err.contains("penetration") && err.contains("slider"),
+                        "{err}"
+                    );
+                    let blocks = s["failure"]["blocks"].to_string();
+                    assert!(blocks.contains("slider") && blocks.contains("base"), "{s}");
+                    // The last good state is kept: no step beyond d_tol was taken.
+                    assert!(!deeper, "{s}");
+                    assert!(out.join("checkpoint.bin").exists());
+                }
+                _ => {
+                    assert!(o.status.success(), "{err}");
+                    assert!(deeper && warned, "{s}");
+                    assert!(s["warnings"][0].as_str().unwrap().contains("penetration"));
+                }
+            }
+        }
+    }
+}
+
+/// Runs `dda` with `args`, killing it after `limit`: None if it had to be killed.
+fn dda_within(args: &[&str], limit: std::time::Duration) -> Option<Output> {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_dda"))
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if started.elapsed() > limit {
+            child.kill().unwrap_or(());
+            child.wait().unwrap();
+            return None;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    Some(child.wait_with_output().unwrap())
+}
+
+/// Names of the entries of `dir`, sorted.
+fn listing(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+/// Data loss: `--out` naming a folder of the user's, the working directory or an
+/// ancestor of it is refused (exit 2) with every file left as it was; an earlier run
+/// of ours is replaced, but not once the user has put a file of their own into it.
+#[test]
+fn run_never_deletes_or_overwrites_a_file_it_did_not_write() {
+    let dir = scratch("data-loss");
+    let mine = dir.join("mine");
+    std::fs::create_dir_all(&mine).unwrap();
+    std::fs::write(mine.join("notes.txt"), "mine").unwrap();
+    std::fs::write(mine.join("summary.json"), "my own summary").unwrap();
+    let o = run_scene(&mine, &["--quiet"]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("mine") && err.contains("not a dda run folder"),
+        "{err}"
+    );
+    assert_eq!(listing(&mine), ["notes.txt", "summary.json"]);
+    assert_eq!(
+        std::fs::read_to_string(mine.join("summary.json")).unwrap(),
+        "my own summary"
+    );
+    assert_eq!(listing(&dir), ["mine"], "no staging folder left");
+
+    // The working directory and its ancestors.
+    let cwd = dir.join("work").join("here");
+    std::fs::create_dir_all(&cwd).unwrap();
+    std::fs::write(cwd.join("keep.txt"), "keep").unwrap();
+    for out in [".", "..", cwd.to_str().unwrap(), "../.."] {
+        let o = Command::new(env!("CARGO_BIN_EXE_dda"))
+            .args(["run", SCENE, "--out", out, "--quiet"])
+            .current_dir(&cwd)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "--out {out}");
+        assert_eq!(listing(&cwd), ["keep.txt"], "--out {out}");
+    }
+    assert_eq!(listing(&dir.join("work")), ["here"]);
+
+    // An earlier run of ours is replaced; with a file of the user's in it, it is not.
+    let ours = dir.join("ours");
+    assert!(run_scene(&ours, &["--quiet"]).status.success());
+    assert!(run_scene(&ours, &["--quiet"]).status.success());
+    std::fs::write(ours.join("frames").join("annotated.svg"), "mine").unwrap();
+    let o = run_scene(&ours, &["--quiet"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("frames/annotated.svg"));
+    assert!(ours.join("frames").join("annotated.svg").exists());
+    assert!(ours.join("summary.json").exists());
+}
+
+/// Malformed JSON whose key/line locator once looped forever (`[}`) gets an answer at
+/// once: exit 2 naming the file.
+#[test]
+fn malformed_json_is_answered_at_once() {
+    let dir = scratch("json-hang");
+    for (k, text) in ["[}", "{\"a\":[}", "{\"name\": [1 }", "[[[[}"]
+        .iter()
+        .enumerate()
+    {
+        let file = dir.join(format!("m{k}.json"));
+        std::fs::write(&file, text).unwrap();
+        for cmd in ["check", "run"] {
+            let o = dda_within(
+                &[cmd, file.to_str().unwrap(), "--quiet"][..if cmd == "check" { 2 } else { 3 }],
+                std::time::Duration::from_secs(20),
+            )
+            .unwrap_or_else(|| panic!("`dda {cmd}` hung on {text}"));
+            assert_eq!(o.status.code(), Some(2), "{text}");
+            assert!(String::from_utf8_lossy(&o.stderr).contains(&format!("m{k}.json")));
+        }
+    }
+}
+
+/// Nesting 50,000 deep once overflowed the stack (exit 134): now exit 2, naming the
+/// file, the line and the documented depth, in either format.
+#[test]
+fn deep_nesting_is_refused_not_a_crash() {
+    let dir = scratch("deep");
+    let n = 50_000;
+    for (name, text) in [
+        (
+            "deep.json",
+            format!("{}1{}", "{\"a\":".repeat(n), "}".repeat(n)),
+        ),
+        (
+            "deep-array.json",
+            format!("{}{}", "[".repeat(n), "]".repeat(n)),
+        ),
+        (
+            "deep.toml",
+            format!("name = \"x\"\na = {}{}", "[".repeat(n), "]".repeat(n)),
+        ),
+        (
+            "deep-table.toml",
+            format!("a = {}1{}", "{b=".repeat(n), "}".repeat(n)),
+        ),
+    ] {
+        let file = dir.join(name);
+        std::fs::write(&file, text).unwrap();
+        let o = dda_within(
+            &["check", file.to_str().unwrap()],
+            std::time::Duration::from_secs(20),
+        )
+        .unwrap_or_else(|| panic!("{name} hung"));
+        assert_eq!(o.status.code(), Some(2), "{name}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains(name) && err.contains("deeper than 64"),
+            "{err}"
+        );
+    }
+}
+
+/// Waits until `path` exists (a run has got that far), for at most a minute.
+fn wait_for(path: &Path) {
+    let started = std::time::Instant::now();
+    while !path.exists() {
+        assert!(
+            started.elapsed().as_secs() < 60,
+            "{} never appeared",
+            path.display()
+        );
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+}
+
+/// One process per run folder: while a run works, a second `run` or `resume` into its
+/// folder exits 2 at once naming the process that holds it; once the first has ended
+/// (here killed, so its lock died with it), a new run may start.
+#[test]
+fn a_second_run_into_a_busy_folder_is_refused_naming_the_process() {
+    let dir = scratch("lock");
+    let out = dir.join("out");
+    let mut first = Command::new(env!("CARGO_BIN_EXE_dda"))
+        .args([
             "run",
-            file.to_str().unwrap(),
+            "paper-5.2b-column-826",
             "--out",
             out.to_str().unwrap(),
-        ]);
-        assert!(o.status.success(), "{o:?}");
-        let s = summary(&out);
-        let deeper =
-            s["max_penetration"].as_f64().unwrap() > s["contact_tolerance"].as_f64().unwrap();
+            "--quiet",
+        ])
+        .spawn()
+        .unwrap();
+    wait_for(&dir.join(".out.partial").join("history.csv"));
+    for args in [
+        vec![
+            "run",
+            "paper-5.2b-column-826",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        vec!["resume", out.to_str().unwrap()],
+    ] {
+        let o = dda(&args);
         let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(err.contains("too soft"), deeper, "{name}: {err}");
-        // The soft one does go deeper than d_tol; the stiff one does not.
-        assert_eq!(deeper, name == "soft", "{name}: {s}");
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains("in use") && err.contains(&first.id().to_string()),
+            "{err}"
+        );
+    }
+    let alive = first.try_wait().unwrap().is_none();
+    first.kill().unwrap_or(());
+    first.wait().unwrap();
+    assert!(alive, "the first run ended before it could be raced");
+    // Killed without a checkpoint: its staging folder is a leftover of ours, reused.
+    assert!(run_scene(&out, &["--quiet"]).status.success());
+}
+
+/// SIGINT, SIGTERM and SIGHUP end a run at the end of a step with a checkpoint (no
+/// `--checkpoint-every` given), outputs flushed, exit 130 / 143 / 129 and a line naming
+/// `dda resume`; the resumed run ends exactly as the uninterrupted one.
+#[cfg(unix)]
+#[test]
+fn signals_end_a_run_with_a_checkpoint_that_resumes_bit_for_bit() {
+    let dir = scratch("signals");
+    let scene = "paper-5.2a-column-229";
+    let whole = dir.join("whole");
+    assert!(
+        dda(&["run", scene, "--out", whole.to_str().unwrap(), "--quiet"])
+            .status
+            .success()
+    );
+    for (signal, code) in [("INT", 130), ("TERM", 143), ("HUP", 129)] {
+        let out = dir.join(signal);
+        let child = Command::new(env!("CARGO_BIN_EXE_dda"))
+            .args(["run", scene, "--out", out.to_str().unwrap(), "--quiet"])
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let work = dir.join(format!(".{signal}.partial"));
+        // Some steps in, so that the checkpoint is not of the start.
+        let history = work.join("history.csv");
+        let started = std::time::Instant::now();
+        while std::fs::metadata(&history).map_or(0, |m| m.len()) < 4096 {
+            assert!(started.elapsed().as_secs() < 60, "the run never got going");
+            std::thread::sleep(std::time::Duration::from_millis(2));
+        }
+        let sent = Command::new("kill")
+            .args([format!("-{signal}"), child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(sent.success());
+        let o = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(code), "SIG{signal}: {err}");
+        assert!(
+            err.contains(&format!("SIG{signal}")) && err.contains("dda resume"),
+            "{err}"
+        );
+        let ck = dda_core::Checkpoint::load(&work.join("checkpoint.bin")).unwrap();
+        assert!(ck.state.totals.steps > 0);
+        assert!(!out.exists(), "an interrupted run is not moved into place");
+        let o = dda(&["resume", out.to_str().unwrap(), "--quiet"]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert_eq!(
+            untimed_summary(&out),
+            untimed_summary(&whole),
+            "SIG{signal}"
+        );
+        assert_eq!(
+            untimed_history(&out.join("history.csv")),
+            untimed_history(&whole.join("history.csv")),
+            "SIG{signal}"
+        );
+        assert_eq!(
+            std::fs::read(out.join("frames.jsonl")).unwrap(),
+            std::fs::read(whole.join("frames.jsonl")).unwrap()
+        );
+    }
+}
+
+/// Absurd values are refused by `dda check` with file, key and line, where they once
+/// passed and failed late or never ended; arrays of the wrong length are errors in TOML
+/// as in JSON (TOML once dropped the extra components).
+#[test]
+fn absurd_values_and_wrong_lengths_are_refused_by_check() {
+    let dir = scratch("absurd");
+    let good = std::fs::read_to_string(SCENE).unwrap();
+    let slider_vertices = "vertices = [[0.0, 1.0], [1.0, 1.0], [1.0, 2.0], [0.0, 2.0]]";
+    for (name, from, to, key) in [
+        (
+            "speed",
+            "velocity = [1.0, 0.0]",
+            "velocity = [1e308, 0.0]",
+            "blocks[1].velocity[0]",
+        ),
+        (
+            "long",
+            "duration = 0.2",
+            "duration = 1e308",
+            "analysis.duration",
+        ),
+        (
+            "short",
+            "duration = 0.2",
+            "duration = 1e-300",
+            "analysis.duration",
+        ),
+        (
+            "dense",
+            "density = 2600.0",
+            "density = 1e308",
+            "materials.rock.density",
+        ),
+        (
+            "steps",
+            "duration = 0.2",
+            "duration = 1e7",
+            "analysis.duration",
+        ),
+        (
+            "penalty",
+            "normal_penalty = 1e9",
+            "normal_penalty = 1e300",
+            "analysis.normal_penalty",
+        ),
+        (
+            "vertex3",
+            slider_vertices,
+            "vertices = [[0.0, 1.0, 5.0], [1.0, 1.0], [1.0, 2.0], [0.0, 2.0]]",
+            "blocks[1].vertices[0]",
+        ),
+        (
+            "gravity4",
+            "gravity = [0.0, -9.81]",
+            "gravity = [0.0, -9.81, 0.0, 1.0]",
+            "analysis.gravity",
+        ),
+        (
+            "gravity1",
+            "gravity = [0.0, -9.81]",
+            "gravity = [-9.81]",
+            "analysis.gravity",
+        ),
+    ] {
+        assert!(good.contains(from), "{name}");
+        let text = good.replace(from, to);
+        let line = text
+            .lines()
+            .position(|l| l.contains(to.lines().next().unwrap()))
+            .unwrap()
+            + 1;
+        let file = dir.join(format!("{name}.toml"));
+        std::fs::write(&file, &text).unwrap();
+        let o = dda(&["check", file.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
+        assert!(
+            err.contains(&format!("{name}.toml:{line}")),
+            "{name}: {err}"
+        );
+        assert!(err.contains(key), "{name}: {err}");
+        // The same scene as JSON is refused the same way.
+        let (scene, _) = dda_core::Scene::load(Path::new(SCENE)).unwrap();
+        let mut v = serde_json::to_value(&scene).unwrap();
+        if name == "vertex3" {
+            v["blocks"][1]["vertices"][0] = serde_json::json!([0.0, 1.0, 5.0]);
+            let json = dir.join(format!("{name}.json"));
+            std::fs::write(&json, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+            let o = dda(&["check", json.to_str().unwrap()]);
+            assert_eq!(o.status.code(), Some(2));
+            assert!(String::from_utf8_lossy(&o.stderr).contains(key));
+        }
+    }
+}
+
+/// A scene whose blocks are all fixed once passed check and failed with an internal
+/// message of the solver; it is refused at check time in the user's words.
+#[test]
+fn a_scene_with_nothing_free_to_move_is_refused_at_check() {
+    let dir = scratch("all-fixed");
+    let file = variant(
+        &dir,
+        "fixed.toml",
+        &[("velocity = [1.0, 0.0]", "fixed = true")],
+    );
+    for cmd in ["check", "run"] {
+        let o = dda(&[cmd, file.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains("nothing can move") && err.contains("fixed.toml"),
+            "{err}"
+        );
+        assert!(
+            !err.contains("faer") && !err.contains("simplicial"),
+            "{err}"
+        );
+    }
+}
+
+/// A block driven at 1,000 m/s into the base once passed through it, creating energy,
+/// and the run "completed": now the run stops with exit 1 at the first step whose
+/// penetration passes d_tol, names the blocks, and keeps the last good state.
+#[test]
+fn broken_physics_is_a_failure_not_a_success() {
+    let dir = scratch("broken");
+    let file = variant(
+        &dir,
+        "fast.toml",
+        &[("velocity = [1.0, 0.0]", "velocity = [0.0, -1000.0]")],
+    );
+    let out = dir.join("out");
+    let o = run_file(&file, &out, &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    let s = summary(&out);
+    assert_eq!(s["status"], "failed");
+    let blocks = s["failure"]["blocks"].to_string();
+    assert!(blocks.contains("slider") && blocks.contains("base"), "{s}");
+    assert!(
+        s["max_penetration"].as_f64().unwrap() <= s["contact_tolerance"].as_f64().unwrap(),
+        "the last good state is before the violation: {s}"
+    );
+    // The slider never passed the base's top (y = 1) by more than d_tol.
+    let y = s["blocks"][1]["centroid"][1].as_f64().unwrap();
+    assert!(
+        y - 0.5 >= 1.0 - s["contact_tolerance"].as_f64().unwrap(),
+        "{s}"
+    );
+}
+
+/// `--max-steps` caps any run: exit 1, status "stopped", the state kept.
+#[test]
+fn max_steps_caps_a_run() {
+    let out = scratch("max-steps").join("out");
+    let o = run_scene(&out, &["--quiet", "--max-steps", "7"]);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let s = summary(&out);
+    assert_eq!(s["status"], "stopped");
+    assert_eq!(s["steps"], 7);
+    assert!(out.join("checkpoint.bin").exists());
+    assert_eq!(
+        run_scene(&out, &["--max-steps", "0"]).status.code(),
+        Some(2)
+    );
+}
+
+/// A step far larger than the motion allows is no longer taken: the sliding block at
+/// 1 m/s with `time_step = 10` s once ended where it started at 1 m/s after two steps.
+/// Friction mu g must stop it after v0^2 / (2 mu g) = 0.140 m (mu = tan 20 deg); the
+/// tolerance allows the distance the block covers in the steps around its stop, a few
+/// d_max (1 mm) each, and a residual speed of 1% of v0.
+#[test]
+fn the_step_respects_the_motion_it_starts_with() {
+    let dir = scratch("big-step");
+    let changes = [
+        ("time_step = 0.001", "time_step = 10"),
+        ("duration = 0.2", "duration = 20"),
+    ];
+    let file = variant(&dir, "big.toml", &changes);
+    let out = dir.join("out");
+    let o = run_file(&file, &out, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = summary(&out);
+    let mu = 20f64.to_radians().tan();
+    let expected = 1.0 / (2.0 * mu * 9.81);
+    let moved = s["blocks"][1]["centroid"][0].as_f64().unwrap() - 0.5;
+    assert!(
+        (moved - expected).abs() < 5e-3,
+        "moved {moved} m, expected {expected} m"
+    );
+    let v = s["blocks"][1]["velocity"][0].as_f64().unwrap();
+    assert!(v.abs() < 0.01, "still moving at {v} m/s");
+}
+
+/// A factor too large for the memory allowed is an error (exit 1) with the estimate
+/// and the system's size, not an abort.
+#[test]
+fn a_factor_too_large_for_memory_exits_1_with_the_estimate() {
+    let out = scratch("memory").join("out");
+    let o = run_scene(&out, &["--quiet", "--max-memory", "1K"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("needs about") && err.contains("unknowns"),
+        "{err}"
+    );
+    assert_eq!(summary(&out)["status"], "failed");
+    assert_eq!(
+        run_scene(&out, &["--max-memory", "lots"]).status.code(),
+        Some(2)
+    );
+}
+
+/// Write failures (a file where a folder must go, a file size limit standing in for a
+/// full disk) name the path and the system's error, exit 1 (not the bad-input 2), and
+/// leave no staging folder or temporary file behind.
+#[test]
+fn write_failures_exit_1_naming_the_path_and_leave_nothing_behind() {
+    let dir = scratch("write-fail");
+    std::fs::write(dir.join("afile"), "x").unwrap();
+    let out = dir.join("afile").join("out");
+    let o = run_scene(&out, &["--quiet"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("afile"), "{err}");
+    assert_eq!(listing(&dir), ["afile"]);
+    #[cfg(unix)]
+    for blocks in [40, 400] {
+        // `ulimit -f` (512-byte blocks) makes a write past the limit fail with EFBIG;
+        // the shell ignores SIGXFSZ, which `exec` passes on.
+        let out = dir.join(format!("fsize{blocks}"));
+        let o = Command::new("sh")
+            .arg("-c")
+            .arg(format!(
+                "ulimit -f {blocks}; trap '' XFSZ; exec \"$0\" run paper-5.1b-column-93 \
+                 --out \"$1\" --quiet --checkpoint-every 5"
+            ))
+            .arg(env!("CARGO_BIN_EXE_dda"))
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{blocks}: {err}");
+        assert!(err.contains(".fsize") && err.contains("too large"), "{err}");
+        assert_eq!(listing(&dir), ["afile"], "{blocks}");
     }
 }

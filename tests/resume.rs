@@ -42,7 +42,10 @@ fn run_to_end(sim: &mut Simulation) -> Vec<StepRecord> {
 fn resumed_run_equals_uninterrupted_run() {
     for scene in scenes() {
         for parallel in [true, false] {
-            let options = RunOptions { parallel };
+            let options = RunOptions {
+                parallel,
+                ..RunOptions::default()
+            };
             let model = scene.validate().unwrap();
             let mut whole = Simulation::new(model.clone(), options);
             let all = run_to_end(&mut whole);
@@ -165,8 +168,20 @@ fn checkpoint_of_another_scene_is_refused() {
 fn threads_give_the_same_steps_bit_for_bit() {
     let scene = dda_bench::builtin("paper-5.2b-column-826").unwrap();
     let model = scene.validate().unwrap();
-    let mut with = Simulation::new(model.clone(), RunOptions { parallel: true });
-    let mut without = Simulation::new(model, RunOptions { parallel: false });
+    let mut with = Simulation::new(
+        model.clone(),
+        RunOptions {
+            parallel: true,
+            ..RunOptions::default()
+        },
+    );
+    let mut without = Simulation::new(
+        model,
+        RunOptions {
+            parallel: false,
+            ..RunOptions::default()
+        },
+    );
     for step in 0..15 {
         let (a, b) = (with.step().unwrap(), without.step().unwrap());
         assert_eq!(untimed(&a), untimed(&b), "step {step}");

@@ -1,12 +1,23 @@
 //! Command-line interface: `dda run`, `dda resume`, `dda render`, `dda check`,
-//! `dda scenes` (DESIGN 5.2).
+//! `dda scenes`.
 //!
-//! Exit codes: 0 success, 1 a simulation that cannot go on (its outputs are written up
-//! to the last good state), 2 bad input (a message naming the file, key and line, and
-//! nothing written).
+//! Exit codes (`docs/cli.md`):
+//! - 0: done;
+//! - 1: the run did not reach a good end: the simulation could not go on or broke
+//!   physics (outputs written up to the last good state, with the diagnosis),
+//!   `--max-steps` was reached, the factor would not fit in memory, or an output could
+//!   not be written (the message names the path and the system's error; no temporary
+//!   file is left);
+//! - 2: bad input: a scene, option or checkpoint that cannot be used, or an output
+//!   folder that is refused or in use (the message names the file, key and line, or the
+//!   folder; nothing is written);
+//! - 129, 130, 143: interrupted by SIGHUP, SIGINT or SIGTERM at the end of a step, with
+//!   a checkpoint that `dda resume` continues.
 
+mod outdir;
 mod render;
 mod run;
+mod signals;
 
 use clap::{Parser, Subcommand};
 use dda_core::{LineIndex, Model, Scene, SceneError};
@@ -41,14 +52,25 @@ enum Command {
     Scenes,
 }
 
-/// Bad input: the message to print, exit code 2.
+/// Why a command could not do its work: the message to print and the exit code.
 #[derive(Debug)]
-pub struct BadInput(pub String);
+pub enum Failure {
+    /// Bad input (scene, option, checkpoint, a refused output folder): exit 2, nothing
+    /// written.
+    Input(String),
+    /// An output could not be written: exit 1.
+    Output(String),
+}
 
-impl From<SceneError> for BadInput {
+impl From<SceneError> for Failure {
     fn from(e: SceneError) -> Self {
-        BadInput(e.to_string())
+        Failure::Input(e.to_string())
     }
+}
+
+/// Bad input with message `msg`.
+pub fn bad(msg: impl Into<String>) -> Failure {
+    Failure::Input(msg.into())
 }
 
 /// Entry point of the binary.
@@ -78,9 +100,13 @@ pub fn main() -> ExitCode {
     };
     match result {
         Ok(code) => code,
-        Err(BadInput(msg)) => {
+        Err(Failure::Input(msg)) => {
             eprintln!("error: {msg}");
             ExitCode::from(2)
+        }
+        Err(Failure::Output(msg)) => {
+            eprintln!("error: {msg}");
+            ExitCode::from(1)
         }
     }
 }
@@ -95,7 +121,7 @@ pub struct Resolved {
 
 /// Reads a scene: a file if `name` is a path to one (or ends in .toml/.json), else a
 /// built-in scene.
-pub fn resolve_scene(name: Option<&str>) -> Result<Resolved, BadInput> {
+pub fn resolve_scene(name: Option<&str>) -> Result<Resolved, Failure> {
     let name = name.unwrap_or(dda_bench::DEFAULT_BUILTIN);
     let path = Path::new(name);
     let looks_like_file = path.exists()
@@ -113,7 +139,7 @@ pub fn resolve_scene(name: Option<&str>) -> Result<Resolved, BadInput> {
     dda_bench::builtin(name)
         .map(|scene| Resolved { scene, lines: None })
         .ok_or_else(|| {
-            BadInput(format!(
+            bad(format!(
                 "`{name}` is neither a scene file nor a built-in scene (`dda scenes` lists them)"
             ))
         })
@@ -121,7 +147,7 @@ pub fn resolve_scene(name: Option<&str>) -> Result<Resolved, BadInput> {
 
 /// Validates `scene`, naming `source` (the file or built-in) and, where `lines` knows
 /// it, the line of the key in errors; prints its warnings on stderr the same way.
-pub fn validate(scene: &Scene, source: &str, lines: Option<&LineIndex>) -> Result<Model, BadInput> {
+pub fn validate(scene: &Scene, source: &str, lines: Option<&LineIndex>) -> Result<Model, Failure> {
     let at = |key: String, message: String| SceneError {
         file: source.to_string(),
         line: lines.and_then(|l| l.line(&key)),
@@ -130,14 +156,14 @@ pub fn validate(scene: &Scene, source: &str, lines: Option<&LineIndex>) -> Resul
     };
     let model = scene
         .validate()
-        .map_err(|v| BadInput(at(v.key, v.message).to_string()))?;
+        .map_err(|v| bad(at(v.key, v.message).to_string()))?;
     for w in &model.warnings {
         eprintln!("warning: {}", at(w.key.clone(), w.message.clone()));
     }
     Ok(model)
 }
 
-fn check(name: &str) -> Result<ExitCode, BadInput> {
+fn check(name: &str) -> Result<ExitCode, Failure> {
     let Resolved { scene, lines } = resolve_scene(Some(name))?;
     let model = validate(&scene, name, lines.as_ref())?;
     let effects = dda_core::Effects::of(&model);

@@ -2,33 +2,35 @@
 //! its scene.json, summary.json, history.csv and frames.jsonl, without simulating again.
 //! `dda run` draws them the same way when it ends.
 
-use super::{BadInput, validate};
+use super::outdir::{check_run_folder, output_error};
+use super::{Failure, bad, validate};
 use dda::report::{Frame, Report, frame_svg, frame_view, parse_history, report_html};
 use dda_core::{Model, Scene, Summary};
 use std::path::Path;
 use std::process::ExitCode;
 
 /// Writes `text` to `path` (a temporary sibling renamed into place).
-pub fn write_new(path: &Path, text: &str) -> Result<(), BadInput> {
-    dda_core::checkpoint::write_atomically(path, text.as_bytes())
-        .map_err(|e| BadInput(format!("cannot write {}: {e}", path.display())))
+pub fn write_new(path: &Path, text: &str) -> Result<(), Failure> {
+    dda_core::checkpoint::write_atomically(path, text.as_bytes()).map_err(|e| output_error(e, path))
 }
 
-fn read(path: &Path) -> Result<String, BadInput> {
-    std::fs::read_to_string(path).map_err(|e| BadInput(format!("{}: {e}", path.display())))
+fn read(path: &Path) -> Result<String, Failure> {
+    std::fs::read_to_string(path).map_err(|e| bad(format!("{}: {e}", path.display())))
 }
 
 /// Reads frames.jsonl, checking every frame against `model`; errors name the line.
-fn read_frames(path: &Path, model: &Model) -> Result<Vec<Frame>, BadInput> {
+fn read_frames(path: &Path, model: &Model) -> Result<Vec<Frame>, Failure> {
     let text = read(path)?;
     let mut frames = Vec::new();
     for (k, line) in text.lines().enumerate() {
-        let at = |m: String| BadInput(format!("{}: line {}: {m}", path.display(), k + 1));
+        let at = |m: String| bad(format!("{}: line {}: {m}", path.display(), k + 1));
         let f: Frame = serde_json::from_str(line).map_err(|e| at(e.to_string()))?;
         let fits = f.blocks.len() == model.blocks.len()
             && f.speed.len() == model.blocks.len()
-            && f.blocks.iter().all(|b| b.len() >= 6 && b.len() % 2 == 0)
-            && f.contacts.len() % 2 == 0;
+            && f.blocks
+                .iter()
+                .all(|b| b.len() >= 6 && b.len().is_multiple_of(2))
+            && f.contacts.len().is_multiple_of(2);
         if !fits {
             return Err(at(format!(
                 "the frame does not fit the scene's {} blocks",
@@ -46,23 +48,26 @@ pub fn render_outputs(
     scene: &Scene,
     model: &Model,
     summary: &Summary,
-) -> Result<(), BadInput> {
+) -> Result<(), Failure> {
     let frames = read_frames(&dir.join("frames.jsonl"), model)?;
     let history_path = dir.join("history.csv");
     let history = parse_history(&read(&history_path)?)
-        .map_err(|e| BadInput(format!("{}: {e}", history_path.display())))?;
+        .map_err(|e| bad(format!("{}: {e}", history_path.display())))?;
     let view = frame_view(model);
     let frames_dir = dir.join("frames");
-    if frames_dir.exists() {
-        std::fs::remove_dir_all(&frames_dir)
-            .map_err(|e| BadInput(format!("cannot clear {}: {e}", frames_dir.display())))?;
+    // The folder holds only our pictures (checked before: `check_run_folder` or a
+    // staging folder of ours); they are drawn anew.
+    if frames_dir.is_dir() {
+        for f in std::fs::read_dir(&frames_dir).map_err(|e| output_error(e, &frames_dir))? {
+            let f = f.map_err(|e| output_error(e, &frames_dir))?;
+            std::fs::remove_file(f.path()).map_err(|e| output_error(e, &f.path()))?;
+        }
+    } else {
+        std::fs::create_dir(&frames_dir).map_err(|e| output_error(e, &frames_dir))?;
     }
-    std::fs::create_dir_all(&frames_dir)
-        .map_err(|e| BadInput(format!("cannot write {}: {e}", frames_dir.display())))?;
     for (k, f) in frames.iter().filter(|f| f.svg).enumerate() {
         let path = frames_dir.join(format!("frame-{k:04}.svg"));
-        std::fs::write(&path, frame_svg(model, f, &view))
-            .map_err(|e| BadInput(format!("cannot write {}: {e}", path.display())))?;
+        write_new(&path, &frame_svg(model, f, &view))?;
     }
     let html = report_html(&Report {
         scene,
@@ -76,14 +81,15 @@ pub fn render_outputs(
 }
 
 /// Runs `dda render DIR`.
-pub fn render(dir: &Path) -> Result<ExitCode, BadInput> {
+pub fn render(dir: &Path) -> Result<ExitCode, Failure> {
+    check_run_folder(dir)?;
     let scene_path = dir.join("scene.json");
     let scene: Scene = serde_json::from_str(&read(&scene_path)?)
-        .map_err(|e| BadInput(format!("{}: {e}", scene_path.display())))?;
+        .map_err(|e| bad(format!("{}: {e}", scene_path.display())))?;
     let model = validate(&scene, &scene_path.display().to_string(), None)?;
     let summary_path = dir.join("summary.json");
     let summary: Summary = serde_json::from_str(&read(&summary_path)?)
-        .map_err(|e| BadInput(format!("{}: {e}", summary_path.display())))?;
+        .map_err(|e| bad(format!("{}: {e}", summary_path.display())))?;
     render_outputs(dir, &scene, &model, &summary)?;
     eprintln!(
         "drew {} and {}",

@@ -1,18 +1,22 @@
 //! `dda run` and `dda resume`: run a scene, writing summary.json, history.csv,
-//! frames.jsonl, frames/*.svg, report.html and (on request, and always on failure)
-//! checkpoint.bin.
+//! frames.jsonl, frames/*.svg, report.html and (on request, on interruption, and
+//! always when the run does not reach its end) checkpoint.bin.
 //!
-//! A run works in a staging directory next to its output directory (`.NAME.partial`)
-//! and moves it into place when it ends, so an output directory that exists is never
-//! half-written. A run with `--checkpoint-every N` saves its full state there every N
-//! steps; if it is killed, `dda resume OUT` continues from the last checkpoint, cutting
-//! history.csv and frames.jsonl back to where the checkpoint was taken, and ends exactly
-//! as the uninterrupted run would have. A failed run moves its outputs into place with
-//! the diagnosis in summary.json and report.html and the last good state in
+//! A run works in a staging folder beside its output folder (`.NAME.partial`, see
+//! `outdir`) and moves it into place when it ends, so an output folder that exists is
+//! never half-written, and a run never deletes or overwrites a file it did not write.
+//! A run with `--checkpoint-every N` saves its full state there every N steps, and
+//! every run saves it when a signal interrupts it; `dda resume OUT` continues from the
+//! last checkpoint, cutting history.csv and frames.jsonl back to where it was taken,
+//! and ends exactly as the uninterrupted run would have. A run that does not reach its
+//! end (failure, broken physics, `--max-steps`) moves its outputs into place with the
+//! diagnosis in summary.json and report.html and the last good state in
 //! checkpoint.bin.
 
+use super::outdir::{Staging, check_out, output_error, staging_dir, work_and_out};
 use super::render::{render_outputs, write_new};
-use super::{BadInput, Resolved, default_out, resolve_scene, validate};
+use super::signals::{self, Signals};
+use super::{Failure, Resolved, bad, default_out, resolve_scene, validate};
 use clap::Args;
 use dda::report::{Frame, HISTORY_HEADER, frame_resolution, frame_view, history_row};
 use dda_core::{Checkpoint, OutputMarks, RunOptions, Scene, Simulation, Summary};
@@ -25,12 +29,30 @@ use std::process::ExitCode;
 /// The checkpoint file's name in a run directory.
 pub const CHECKPOINT_FILE: &str = "checkpoint.bin";
 
+/// Options of `run` and `resume` that bound or relax a run.
+#[derive(Debug, Args)]
+pub struct Limits {
+    /// Go on through steps that break physics (penetration beyond d_tol, energy
+    /// created), recording them in summary.json's `warnings`; without it such a step
+    /// stops the run (exit 1) with the last good state.
+    #[arg(long)]
+    keep_going: bool,
+    /// Stop after this many steps in all (exit 1, the state kept for `dda resume`).
+    #[arg(long, value_name = "N")]
+    max_steps: Option<u64>,
+    /// Most memory the global matrix's factor may take, in bytes or with a suffix K, M
+    /// or G (default: the memory available when the run starts).
+    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+    max_memory: Option<u64>,
+}
+
 /// Arguments of `dda run`.
 #[derive(Debug, Args)]
 pub struct RunArgs {
     /// Scene file (.toml or .json) or built-in scene name; default: the jointed column.
     scene: Option<String>,
-    /// Output directory (default: runs/<scene name>).
+    /// Output folder (default: runs/<scene name>): a new folder, or one an earlier
+    /// `dda run` wrote, which is replaced.
     #[arg(long)]
     out: Option<PathBuf>,
     /// Contact detector: cover, type-1 or type-2 (overrides the scene).
@@ -41,12 +63,14 @@ pub struct RunArgs {
     #[arg(long)]
     rtol: Option<f64>,
     /// Save the full state every N steps, to continue with `dda resume` if the run is
-    /// interrupted.
+    /// killed.
     #[arg(long, value_name = "N")]
     checkpoint_every: Option<u64>,
     /// No progress bar and no report on the terminal.
     #[arg(long)]
     quiet: bool,
+    #[command(flatten)]
+    limits: Limits,
 }
 
 /// Arguments of `dda resume`.
@@ -58,14 +82,60 @@ pub struct ResumeArgs {
     /// No progress bar and no report on the terminal.
     #[arg(long)]
     quiet: bool,
+    #[command(flatten)]
+    limits: Limits,
+}
+
+/// A byte count: digits with an optional suffix K, M or G (powers of 1024).
+fn parse_size(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let (digits, unit) = match t.char_indices().last() {
+        Some((i, c)) if c.is_ascii_alphabetic() => (&t[..i], c.to_ascii_uppercase()),
+        _ => (t, 'B'),
+    };
+    let scale: u64 = match unit {
+        'B' => 1,
+        'K' => 1 << 10,
+        'M' => 1 << 20,
+        'G' => 1 << 30,
+        _ => return Err(format!("`{s}`: use a number of bytes, or K, M or G")),
+    };
+    digits
+        .parse::<u64>()
+        .ok()
+        .and_then(|n| n.checked_mul(scale))
+        .filter(|&n| n > 0)
+        .ok_or_else(|| format!("`{s}`: use a positive number of bytes, or K, M or G"))
+}
+
+/// Memory available now, from /proc/meminfo (None where it cannot be read).
+fn available_memory() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+impl Limits {
+    /// The run options these limits ask for.
+    fn options(&self, keep_going: bool) -> RunOptions {
+        RunOptions {
+            stop_on_violation: !keep_going,
+            max_memory: self.max_memory.or_else(available_memory),
+            ..RunOptions::default()
+        }
+    }
 }
 
 /// A run under way: its scene, state, directories and output files.
 struct Job {
     scene: Scene,
     sim: Simulation,
+    staging: Staging,
     work: PathBuf,
     out: PathBuf,
+    max_steps: Option<u64>,
+    signals: Signals,
     marks: OutputMarks,
     history: BufWriter<File>,
     frames: BufWriter<File>,
@@ -74,12 +144,12 @@ struct Job {
     quiet: bool,
 }
 
-fn io_err(e: std::io::Error, what: &Path) -> BadInput {
-    BadInput(format!("cannot write {}: {e}", what.display()))
+fn io_err(e: std::io::Error, what: &Path) -> Failure {
+    output_error(e, what)
 }
 
 /// Runs `dda run`.
-pub fn run(args: RunArgs) -> Result<ExitCode, BadInput> {
+pub fn run(args: RunArgs) -> Result<ExitCode, Failure> {
     let source = args
         .scene
         .clone()
@@ -90,56 +160,70 @@ pub fn run(args: RunArgs) -> Result<ExitCode, BadInput> {
     }
     if let Some(r) = args.rtol {
         if !(r.is_finite() && r > 0.0) {
-            return Err(BadInput(format!(
-                "--rtol must be a positive number, got {r}"
-            )));
+            return Err(bad(format!("--rtol must be a positive number, got {r}")));
         }
         scene.scale_tolerances(r);
     }
     if args.checkpoint_every == Some(0) {
-        return Err(BadInput("--checkpoint-every must be at least 1".into()));
+        return Err(bad("--checkpoint-every must be at least 1"));
+    }
+    if args.limits.max_steps == Some(0) {
+        return Err(bad("--max-steps must be at least 1"));
     }
     let model = validate(&scene, &source, lines.as_ref())?;
     let out = args.out.clone().unwrap_or_else(|| default_out(&scene));
-    let work = staging_dir(&out);
-    if work.join(CHECKPOINT_FILE).exists() {
-        return Err(BadInput(format!(
-            "{} holds an interrupted run of this output: `dda resume {}` continues it; \
-             delete {} to start afresh",
-            work.display(),
-            out.display(),
-            work.display()
-        )));
-    }
-    if work.exists() {
-        std::fs::remove_dir_all(&work).map_err(|e| io_err(e, &work))?;
-    }
-    std::fs::create_dir_all(&work).map_err(|e| io_err(e, &work))?;
-    let scene_json = serde_json::to_string_pretty(&scene)
-        .map_err(|e| BadInput(format!("cannot serialise the scene: {e}")))?;
-    write_new(&work.join("scene.json"), &(scene_json + "\n"))?;
-
-    let sim = Simulation::new(model, RunOptions::default());
-    let history_path = work.join("history.csv");
-    let frames_path = work.join("frames.jsonl");
-    let history =
-        BufWriter::new(File::create(&history_path).map_err(|e| io_err(e, &history_path))?);
-    let frames = BufWriter::new(File::create(&frames_path).map_err(|e| io_err(e, &frames_path))?);
-    let mut job = Job::new(scene, sim, work, out, history, frames, args.quiet);
+    check_out(&out)?;
+    let signals = Signals::install();
+    let staging = Staging::create(&staging_dir(&out), &out)?;
+    let work = staging.dir.clone();
+    // From here on the staging folder is ours: an output failure removes it.
+    let started = (|| {
+        let scene_json = serde_json::to_string_pretty(&scene)
+            .map_err(|e| Failure::Output(format!("cannot serialise the scene: {e}")))?;
+        write_new(&work.join("scene.json"), &(scene_json + "\n"))?;
+        let history_path = work.join("history.csv");
+        let frames_path = work.join("frames.jsonl");
+        let history =
+            BufWriter::new(File::create(&history_path).map_err(|e| io_err(e, &history_path))?);
+        let frames =
+            BufWriter::new(File::create(&frames_path).map_err(|e| io_err(e, &frames_path))?);
+        Ok((history, frames))
+    })();
+    let (history, frames) = match started {
+        Ok(files) => files,
+        Err(e) => {
+            staging.abandon();
+            return Err(e);
+        }
+    };
+    let options = args.limits.options(args.limits.keep_going);
+    let sim = Simulation::new(model, options);
+    let mut job = Job::new(scene, sim, staging, out, history, frames, args.quiet);
     job.marks.checkpoint_every = args.checkpoint_every.unwrap_or(0);
-    job.write_history(HISTORY_HEADER)?;
-    job.write_frame(job.sim.model().params.frames > 0)?;
-    job.announce("scene");
-    job.drive()
+    job.marks.keep_going = args.limits.keep_going;
+    job.max_steps = args.limits.max_steps;
+    job.signals = signals;
+    job.finish(|job| {
+        job.write_history(HISTORY_HEADER)?;
+        job.write_frame(job.sim.model().params.frames > 0)?;
+        job.announce("scene");
+        job.drive()
+    })
 }
 
 /// Runs `dda resume`.
-pub fn resume(args: ResumeArgs) -> Result<ExitCode, BadInput> {
+pub fn resume(args: ResumeArgs) -> Result<ExitCode, Failure> {
     let (work, out) = work_and_out(&args.dir);
     let path = work.join(CHECKPOINT_FILE);
+    // A folder in use is named as such before anything else is said of it.
+    let staging = if work.is_dir() {
+        Some(Staging::resume(&work)?)
+    } else {
+        None
+    };
     if !path.exists() {
         let done = out.join("summary.json").exists();
-        return Err(BadInput(if done {
+        return Err(bad(if done {
             format!(
                 "{} is a finished run (see its summary.json): nothing to resume",
                 out.display()
@@ -151,31 +235,44 @@ pub fn resume(args: ResumeArgs) -> Result<ExitCode, BadInput> {
             )
         }));
     }
-    let ck = Checkpoint::load(&path).map_err(|e| BadInput(e.to_string()))?;
-    let scene = ck.scene(&path).map_err(|e| BadInput(e.to_string()))?;
+    if args.limits.max_steps == Some(0) {
+        return Err(bad("--max-steps must be at least 1"));
+    }
+    check_out(&out)?;
+    let signals = Signals::install();
+    let Some(staging) = staging else {
+        return Err(bad(format!("{} does not exist", work.display())));
+    };
+    let ck = Checkpoint::load(&path).map_err(|e| bad(e.to_string()))?;
+    let scene = ck.scene(&path).map_err(|e| bad(e.to_string()))?;
     let model = validate(&scene, &path.display().to_string(), None)?;
-    let marks = ck.outputs.clone();
+    let mut marks = ck.outputs.clone();
+    marks.keep_going |= args.limits.keep_going;
     let sim = ck
-        .resume(model, RunOptions::default(), &path)
-        .map_err(|e| BadInput(e.to_string()))?;
+        .resume(model, args.limits.options(marks.keep_going), &path)
+        .map_err(|e| bad(e.to_string()))?;
     let history = reopen(&work.join("history.csv"), marks.history_bytes)?;
     let frames = reopen(&work.join("frames.jsonl"), marks.frames_bytes)?;
-    let mut job = Job::new(scene, sim, work, out, history, frames, args.quiet);
+    let mut job = Job::new(scene, sim, staging, out, history, frames, args.quiet);
     job.marks = marks;
-    job.announce("resuming");
-    job.drive()
+    job.max_steps = args.limits.max_steps;
+    job.signals = signals;
+    job.finish(|job| {
+        job.announce("resuming");
+        job.drive()
+    })
 }
 
 /// Opens `path` for appending after cutting it back to `len` bytes.
-fn reopen(path: &Path, len: u64) -> Result<BufWriter<File>, BadInput> {
-    let bad = |e: std::io::Error| BadInput(format!("cannot resume {}: {e}", path.display()));
+fn reopen(path: &Path, len: u64) -> Result<BufWriter<File>, Failure> {
+    let bad = |e: std::io::Error| bad(format!("cannot resume {}: {e}", path.display()));
     let mut f = std::fs::OpenOptions::new()
         .write(true)
         .open(path)
         .map_err(bad)?;
     let have = f.metadata().map_err(bad)?.len();
     if have < len {
-        return Err(BadInput(format!(
+        return Err(super::bad(format!(
             "cannot resume: {} has {have} bytes, the checkpoint was taken after {len}",
             path.display()
         )));
@@ -183,22 +280,6 @@ fn reopen(path: &Path, len: u64) -> Result<BufWriter<File>, BadInput> {
     f.set_len(len).map_err(bad)?;
     f.seek(SeekFrom::End(0)).map_err(bad)?;
     Ok(BufWriter::new(f))
-}
-
-/// The staging (work) directory and the output directory named by `dir`, which may be
-/// either.
-fn work_and_out(dir: &Path) -> (PathBuf, PathBuf) {
-    let name = dir
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    match name
-        .strip_prefix('.')
-        .and_then(|n| n.strip_suffix(".partial"))
-    {
-        Some(base) => (dir.to_path_buf(), dir.with_file_name(base)),
-        None => (staging_dir(dir), dir.to_path_buf()),
-    }
 }
 
 /// Most coordinates the animation holds over all its frames; fewer frames for larger
@@ -209,7 +290,7 @@ impl Job {
     fn new(
         scene: Scene,
         sim: Simulation,
-        work: PathBuf,
+        staging: Staging,
         out: PathBuf,
         history: BufWriter<File>,
         frames: BufWriter<File>,
@@ -221,8 +302,11 @@ impl Job {
         Job {
             scene,
             sim,
-            work,
+            work: staging.dir.clone(),
+            staging,
             out,
+            max_steps: None,
+            signals: Signals::default(),
             marks: OutputMarks {
                 animation_next: 1,
                 svg_next: 1,
@@ -233,6 +317,24 @@ impl Job {
             animation_frames,
             resolution,
             quiet,
+        }
+    }
+
+    /// Runs `work` on the job; if it fails to write an output, cleans the staging folder
+    /// up (see [`Staging::abandon`]) before reporting it.
+    fn finish(
+        self,
+        work: impl FnOnce(&mut Job) -> Result<Outcome, Failure>,
+    ) -> Result<ExitCode, Failure> {
+        let mut job = self;
+        match work(&mut job) {
+            Ok(Outcome::Published(code)) => Ok(code),
+            Ok(Outcome::Interrupted(code)) => Ok(code),
+            Err(e) => {
+                let Job { staging, .. } = job;
+                staging.abandon();
+                Err(e)
+            }
         }
     }
 
@@ -263,7 +365,7 @@ impl Job {
         }
     }
 
-    fn write_history(&mut self, line: &str) -> Result<(), BadInput> {
+    fn write_history(&mut self, line: &str) -> Result<(), Failure> {
         let path = self.work.join("history.csv");
         writeln!(self.history, "{line}").map_err(|e| io_err(e, &path))?;
         self.marks.history_bytes += line.len() as u64 + 1;
@@ -271,11 +373,11 @@ impl Job {
     }
 
     /// Appends the current state to frames.jsonl.
-    fn write_frame(&mut self, svg: bool) -> Result<(), BadInput> {
+    fn write_frame(&mut self, svg: bool) -> Result<(), Failure> {
         let path = self.work.join("frames.jsonl");
         let frame = Frame::of(&self.sim, svg, self.resolution);
         let line = serde_json::to_string(&frame)
-            .map_err(|e| BadInput(format!("cannot serialise a frame: {e}")))?;
+            .map_err(|e| Failure::Output(format!("cannot serialise a frame: {e}")))?;
         writeln!(self.frames, "{line}").map_err(|e| io_err(e, &path))?;
         self.marks.frames_bytes += line.len() as u64 + 1;
         Ok(())
@@ -283,7 +385,7 @@ impl Job {
 
     /// Records a frame if the step crossed an instant of the animation grid or of the
     /// SVG-frame grid.
-    fn sample_frames(&mut self) -> Result<(), BadInput> {
+    fn sample_frames(&mut self) -> Result<(), Failure> {
         let p = &self.sim.model().params;
         let (t, duration, svg_frames) = (self.sim.time(), p.duration, u64::from(p.frames));
         let due = |next: u64, n: u64| {
@@ -304,7 +406,7 @@ impl Job {
     }
 
     /// Flushes history.csv and frames.jsonl, and with `sync` forces them to disk.
-    fn flush(&mut self, sync: bool) -> Result<(), BadInput> {
+    fn flush(&mut self, sync: bool) -> Result<(), Failure> {
         for (w, name) in [
             (&mut self.history, "history.csv"),
             (&mut self.frames, "frames.jsonl"),
@@ -319,17 +421,18 @@ impl Job {
     }
 
     /// Flushes the output files to disk and saves the checkpoint atomically.
-    fn checkpoint(&mut self) -> Result<(), BadInput> {
+    fn checkpoint(&mut self) -> Result<(), Failure> {
         self.flush(true)?;
         let ck = Checkpoint::of(&self.sim, &self.scene, self.marks.clone())
-            .map_err(|e| BadInput(format!("cannot build the checkpoint: {e}")))?;
+            .map_err(|e| Failure::Output(format!("cannot build the checkpoint: {e}")))?;
         ck.save(&self.work.join(CHECKPOINT_FILE))
-            .map_err(|e| BadInput(e.to_string()))
+            .map_err(|e| Failure::Output(format!("cannot write the checkpoint: {e}")))
     }
 
-    /// Steps to the end (or a failure), then writes the summary and the report and moves
-    /// the outputs into place.
-    fn drive(mut self) -> Result<ExitCode, BadInput> {
+    /// Steps to the end, a failure, the step limit or a signal. At a signal, saves a
+    /// checkpoint and leaves the run in its staging folder for `dda resume`; otherwise
+    /// writes the summary and the report and moves the outputs into place.
+    fn drive(&mut self) -> Result<Outcome, Failure> {
         let bar = if !self.quiet && std::io::stderr().is_terminal() {
             let bar = ProgressBar::new(1000);
             bar.set_style(
@@ -344,14 +447,27 @@ impl Job {
             None
         };
         let duration = self.sim.model().params.duration;
-        let mut error = None;
+        let mut end = End::Done;
         while !self.sim.finished() {
+            if let Some(sig) = self.signals.caught() {
+                end = End::Signal(sig);
+                break;
+            }
+            if let Some(n) = self.max_steps
+                && self.sim.totals().steps >= n
+            {
+                end = End::Stopped(format!(
+                    "stopped after {n} steps (--max-steps) at t = {:.6} s of {duration} s",
+                    self.sim.time()
+                ));
+                break;
+            }
             match self.sim.step() {
                 Ok(rec) => {
                     self.write_history(&history_row(&rec))?;
                     self.sample_frames()?;
                     let every = self.marks.checkpoint_every;
-                    if every > 0 && rec.step % every == 0 && !self.sim.finished() {
+                    if every > 0 && rec.step.is_multiple_of(every) && !self.sim.finished() {
                         self.checkpoint()?;
                     }
                     if let Some(bar) = &bar {
@@ -360,7 +476,7 @@ impl Job {
                     }
                 }
                 Err(e) => {
-                    error = Some(e.to_string());
+                    end = End::Failed(e.to_string());
                     break;
                 }
             }
@@ -368,26 +484,45 @@ impl Job {
         if let Some(bar) = bar {
             bar.finish_and_clear();
         }
-        let checkpoint_path = self.work.join(CHECKPOINT_FILE);
+        if let End::Signal(sig) = end {
+            self.checkpoint()?;
+            eprintln!(
+                "interrupted by {} at t = {} s after {} steps; the state is saved: \
+                 `dda resume {}` continues the run",
+                signals::name(sig),
+                self.sim.time(),
+                self.sim.totals().steps,
+                self.out.display()
+            );
+            return Ok(Outcome::Interrupted(ExitCode::from((128 + sig) as u8)));
+        }
+        let (status, error) = match &end {
+            End::Done => ("completed", None),
+            End::Failed(e) => ("failed", Some(e.clone())),
+            End::Stopped(e) => ("stopped", Some(e.clone())),
+            End::Signal(_) => unreachable!("handled above"),
+        };
         if error.is_some() {
             // The last good state: as the final frame, and as a checkpoint.
             self.write_frame(true)?;
             self.checkpoint()?;
         } else {
             self.flush(false)?;
-            if checkpoint_path.exists() {
-                std::fs::remove_file(&checkpoint_path).map_err(|e| io_err(e, &checkpoint_path))?;
-            }
         }
-        let summary = Summary::of(&self.sim, error.clone());
+        let mut summary = Summary::of(&self.sim, error.clone());
+        summary.status = status.to_string();
         let json = serde_json::to_string_pretty(&summary)
-            .map_err(|e| BadInput(format!("cannot serialise the summary: {e}")))?;
+            .map_err(|e| Failure::Output(format!("cannot serialise the summary: {e}")))?;
         write_new(&self.work.join("summary.json"), &(json + "\n"))?;
         render_outputs(&self.work, &self.scene, self.sim.model(), &summary)?;
-        if self.out.exists() {
-            std::fs::remove_dir_all(&self.out).map_err(|e| io_err(e, &self.out))?;
+        self.staging.publish(&self.out)?;
+        // A finished run's checkpoint goes only now: killed before this point, the run
+        // is still resumable from its staging folder.
+        let published_checkpoint = self.out.join(CHECKPOINT_FILE);
+        if error.is_none() && published_checkpoint.exists() {
+            std::fs::remove_file(&published_checkpoint)
+                .map_err(|e| io_err(e, &published_checkpoint))?;
         }
-        std::fs::rename(&self.work, &self.out).map_err(|e| io_err(e, &self.out))?;
 
         if !self.quiet {
             let s = &summary;
@@ -407,21 +542,17 @@ impl Job {
             );
             eprintln!("wrote {}", self.out.display());
         }
-        if summary.max_penetration > summary.contact_tolerance {
-            // The paper's working rule (section 2.6): contacts are found within d_tol, so a
-            // deeper penetration means the penalty is too soft for the tolerance.
-            eprintln!(
-                "warning: the largest penetration, {:.3e} m, exceeded the contact tolerance \
-                 {:.3e} m: `analysis.normal_penalty` ({:.3e} N/m) is too soft for it \
-                 (paper section 2.6); raise it, or `analysis.contact_tolerance`",
-                summary.max_penetration,
-                summary.contact_tolerance,
-                self.sim.model().params.normal_penalty
-            );
+        for w in &summary.warnings {
+            eprintln!("warning: {w}");
         }
         match error {
             Some(e) => {
-                eprintln!("error: the simulation cannot go on: {e}");
+                let what = if status == "stopped" {
+                    "the run stopped"
+                } else {
+                    "the simulation cannot go on"
+                };
+                eprintln!("error: {what}: {e}");
                 if let Some(d) = &summary.failure
                     && !d.blocks.is_empty()
                 {
@@ -432,18 +563,27 @@ impl Job {
                     self.out.join(CHECKPOINT_FILE).display(),
                     self.out.join("summary.json").display()
                 );
-                Ok(ExitCode::from(1))
+                Ok(Outcome::Published(ExitCode::from(1)))
             }
-            None => Ok(ExitCode::SUCCESS),
+            None => Ok(Outcome::Published(ExitCode::SUCCESS)),
         }
     }
 }
 
-/// A sibling of `out` to write into before moving the result into place.
-fn staging_dir(out: &Path) -> PathBuf {
-    let name = out
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "run".into());
-    out.with_file_name(format!(".{name}.partial"))
+/// How the stepping ended.
+enum End {
+    /// The duration was reached.
+    Done,
+    /// A step failed or broke physics.
+    Failed(String),
+    /// `--max-steps` was reached.
+    Stopped(String),
+    /// A signal arrived.
+    Signal(i32),
+}
+
+/// What a job left: published outputs, or an interrupted run in its staging folder.
+enum Outcome {
+    Published(ExitCode),
+    Interrupted(ExitCode),
 }

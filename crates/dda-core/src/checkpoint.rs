@@ -22,8 +22,9 @@ use std::path::{Path, PathBuf};
 pub const CHECKPOINT_MAGIC: [u8; 8] = *b"DDA-CKPT";
 
 /// The format version written; files of another version are refused. Version 2: the
-/// contacts' pairs carry the cover detector's deep flag.
-pub const CHECKPOINT_VERSION: u32 = 2;
+/// contacts' pairs carry the cover detector's deep flag. Version 3: the physics guard's
+/// energy balance and recorded violations.
+pub const CHECKPOINT_VERSION: u32 = 3;
 
 /// Length of the header before the payload.
 const HEADER_LEN: usize = 24;
@@ -42,6 +43,8 @@ pub struct OutputMarks {
     pub svg_next: u64,
     /// Steps between checkpoints (0: only at the end or on failure).
     pub checkpoint_every: u64,
+    /// Whether the run goes on through violations of physics (`--keep-going`).
+    pub keep_going: bool,
 }
 
 /// What a checkpoint file holds.
@@ -247,19 +250,24 @@ impl Checkpoint {
 
 /// Writes `bytes` to `path` so that `path` holds either its old contents or all of the
 /// new ones whenever the process dies: a temporary sibling, fsync, rename, directory
-/// fsync.
+/// fsync. On an error the temporary sibling is removed.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "checkpoint".into());
     let tmp = path.with_file_name(format!(".{name}.tmp"));
-    {
+    let written = (|| {
         let mut f = std::fs::File::create(&tmp)?;
         f.write_all(bytes)?;
         f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if let Err(e) = written {
+        // No temporary file is left behind.
+        let _ = std::fs::remove_file(&tmp);
+        return Err(e);
     }
-    std::fs::rename(&tmp, path)?;
     if let Some(dir) = path.parent() {
         let dir = if dir.as_os_str().is_empty() {
             Path::new(".")

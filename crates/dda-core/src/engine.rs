@@ -33,6 +33,7 @@
 //!   C (ex, ey, gxy); velocities V <- 2 D / dt - V (dynamic) or 0 (static).
 
 use crate::effects::Effects;
+use crate::guard::{self, ENERGY_TOLERANCE, EnergyBalance, Violation};
 use crate::kinematics::{Mat6, Vec6, along, elasticity, mass_matrix, point_displacement};
 use crate::scene::{JointProps, Mode, Model};
 use crate::springs::{HalfStep, Row, contact_length, contact_points, normal_row, shear_row};
@@ -86,6 +87,17 @@ pub enum SimError {
         t: f64,
         /// Block id.
         block: String,
+    },
+    /// The step would break physics: a penetration deeper than d_tol, or energy created
+    /// beyond [`ENERGY_TOLERANCE`] ([`RunOptions::stop_on_violation`]).
+    #[error("at t = {t:.6} s: {what} (last good state kept)")]
+    BrokenPhysics {
+        /// Simulated time of the last good state.
+        t: f64,
+        /// What broke, in words.
+        what: String,
+        /// Ids of the blocks involved.
+        blocks: Vec<String>,
     },
 }
 
@@ -238,6 +250,10 @@ pub struct Snapshot {
     pub factored_values: Option<Vec<f64>>,
     /// Symbolic factorisations, numeric factorisations and low-rank solves so far.
     pub counters: [u64; 3],
+    /// The physics guard's energy balance.
+    pub energy: EnergyBalance,
+    /// Violations recorded by a run that goes on through them.
+    pub violations: Vec<Violation>,
 }
 
 /// Options of a run that are not part of the scene.
@@ -245,6 +261,16 @@ pub struct Snapshot {
 pub struct RunOptions {
     /// Detect contacts on the thread pool (results are identical either way).
     pub parallel: bool,
+    /// Stop with [`SimError::BrokenPhysics`] at the first step that breaks physics
+    /// (penetration beyond d_tol, energy created beyond [`ENERGY_TOLERANCE`]), keeping
+    /// the state before it. Off, the step is taken and the violation recorded
+    /// ([`Simulation::violations`]). The `dda` command turns it on unless
+    /// `--keep-going`; off by default for library users who judge runs themselves (the
+    /// sweeps and the robustness study record what a detector does wrong).
+    pub stop_on_violation: bool,
+    /// Most bytes the factor of the global matrix may take (None: no bound but the
+    /// allocator's, whose failure is still an error, not an abort).
+    pub max_memory: Option<u64>,
 }
 
 impl Default for RunOptions {
@@ -256,7 +282,11 @@ impl Default for RunOptions {
     /// search, which are sequential, and the parallel parts are too short per step to
     /// pay for waking the pool.
     fn default() -> Self {
-        RunOptions { parallel: false }
+        RunOptions {
+            parallel: false,
+            stop_on_violation: false,
+            max_memory: None,
+        }
     }
 }
 
@@ -452,6 +482,15 @@ pub struct Simulation {
     flipped: Vec<u32>,
     /// Why the run stopped, once it has.
     diagnosis: Option<Diagnosis>,
+    /// The physics guard's energy balance (saved).
+    energy: EnergyBalance,
+    /// Energy below the model's resolution, added to the guard's reference (see
+    /// `guard`): every free block lowered by d_tol, and a spring over the start overlap.
+    energy_floor: f64,
+    /// Violations recorded so far (saved).
+    violations: Vec<Violation>,
+    /// Each free block's gain of kinetic energy in the step (scratch of the guard).
+    gains: Vec<(f64, usize)>,
 }
 
 impl std::fmt::Debug for Simulation {
@@ -504,6 +543,25 @@ impl Simulation {
         let material = model.blocks.iter().map(|b| b.material as u32).collect();
         let n = blocks.len();
         let skin = NEIGHBOUR_SKIN * model.params.d_max;
+        let mut system = BlockSystem::new();
+        system.memory_limit = options.max_memory;
+        let mut energy_floor = 0.0;
+        let mut initial = 0.0;
+        for (i, b) in blocks.iter().enumerate() {
+            if model.blocks[i].fixed {
+                continue;
+            }
+            let mat = model.materials[model.blocks[i].material];
+            let m = b.polygon.moments();
+            let g = p.gravity.map_or(0.0, |g| g.length());
+            let overlap = 1e-9 * b.polygon.diameter();
+            energy_floor +=
+                mat.density * m.area * g * p.d_tol + 0.5 * p.normal_penalty * overlap * overlap;
+            initial += guard::kinetic(&mass_matrix(&m, mat.density), &b.velocity);
+            if effects.elasticity {
+                initial += guard::strain(m.area, &b.stress, mat.young, mat.poisson);
+            }
+        }
         Simulation {
             dt: p.dt0,
             nd: effects.dofs_per_block(),
@@ -523,7 +581,7 @@ impl Simulation {
             t: 0.0,
             totals: Totals::default(),
             contacts: ContactSet::default(),
-            system: BlockSystem::new(),
+            system,
             prev: ContactSet::default(),
             track_list: TrackList::new(),
             neighbours: NeighbourSearch::with_skin(skin),
@@ -550,7 +608,26 @@ impl Simulation {
             motions: Vec::with_capacity(n),
             flipped: Vec::new(),
             diagnosis: None,
+            energy: EnergyBalance {
+                supplied: initial,
+                supplied_max: initial,
+                worst_ratio: 0.0,
+            },
+            energy_floor,
+            violations: Vec::new(),
+            gains: Vec::new(),
         }
+    }
+
+    /// Violations of physics recorded so far by a run that goes on through them
+    /// ([`RunOptions::stop_on_violation`] off).
+    pub fn violations(&self) -> &[Violation] {
+        &self.violations
+    }
+
+    /// The physics guard's energy balance so far.
+    pub fn energy_balance(&self) -> &EnergyBalance {
+        &self.energy
     }
 
     /// The validated scene.
@@ -640,6 +717,8 @@ impl Simulation {
             pattern: self.pattern.clone(),
             factored_values: self.system.factored_values().map(|v| v.to_vec()),
             counters: [symbolic, numeric, low_rank],
+            energy: self.energy,
+            violations: self.violations.clone(),
         }
     }
 
@@ -709,6 +788,8 @@ impl Simulation {
         sim.totals = snap.totals;
         sim.contacts = snap.contacts;
         sim.pattern = snap.pattern;
+        sim.energy = snap.energy;
+        sim.violations = snap.violations;
         if sim.totals.steps > 0 {
             // The system holds the pattern of the last step (set at every step).
             sim.system
@@ -777,10 +858,13 @@ impl Simulation {
         let (duration, d_max, theta_max, max_oci, dt0) =
             (p.duration, p.d_max, p.theta_max, p.max_oci, p.dt0);
         let remaining = duration - self.t;
+        // The step respects the motion it starts with: no block's current velocity may
+        // carry a vertex beyond d_max, or turn it beyond theta_max, within it.
+        let planned = self.dt.min(self.velocity_room());
         // Land on `duration`; a remainder within 1e-6 of a step is taken with it rather
         // than left as a sliver step.
-        let landing = self.dt * (1.0 + 1e-6) >= remaining;
-        let mut dt = if landing { remaining } else { self.dt };
+        let landing = planned * (1.0 + 1e-6) >= remaining;
+        let mut dt = if landing { remaining } else { planned };
 
         let mut first_attempt = true;
         loop {
@@ -1452,12 +1536,16 @@ impl Simulation {
     /// Commits the trial solution: moves blocks, updates stresses and velocities, and
     /// records penetration.
     fn accept(&mut self, dt: f64, rec: &mut StepRecord) -> Result<(), SimError> {
-        let mut max_pen = 0.0f64;
+        let (mut max_pen, mut deepest) = (0.0f64, None);
         for (k, c) in self.contacts.contacts.iter().enumerate() {
             if c.active && c.state.is_closed() {
-                max_pen = max_pen.max(-self.rows[k].eval(&self.d));
+                let pen = -self.rows[k].eval(&self.d);
+                if pen > max_pen {
+                    (max_pen, deepest) = (pen, Some(k));
+                }
             }
         }
+        self.guard(dt, max_pen, deepest)?;
         rec.max_penetration = max_pen;
         rec.dt = dt;
         // Check every block's motion first, so that a failure leaves the state untouched.
@@ -1524,6 +1612,9 @@ impl Simulation {
             SimError::Inverted { block, .. } | SimError::NonFinite { block, .. } => {
                 blocks.extend(index(block));
             }
+            SimError::BrokenPhysics { blocks: ids, .. } => {
+                blocks.extend(ids.iter().filter_map(|id| index(id)));
+            }
             _ => {}
         }
         if contacts.is_empty() {
@@ -1575,6 +1666,144 @@ impl Simulation {
             blocks: blocks.into_iter().map(id).collect(),
             contacts: notes,
         });
+    }
+
+    /// The largest step the blocks' current velocities allow: the smaller of d_max over
+    /// the fastest vertex speed (strain rates included) and theta_max over the fastest
+    /// spin, infinite when nothing moves.
+    fn velocity_room(&self) -> f64 {
+        let p = &self.model.params;
+        let (mut speed, mut spin) = (0.0f64, 0.0f64);
+        for (i, s) in self.shapes.iter().enumerate() {
+            if self.free[i].is_none() {
+                continue;
+            }
+            let v = &self.blocks[i].velocity;
+            spin = spin.max(v[2].abs());
+            for &x in &s.vertices {
+                speed = speed.max(point_displacement(x, s.centroid, v).length());
+            }
+        }
+        (p.d_max / speed).min(p.theta_max / spin)
+    }
+
+    /// The physics guard (see `guard`) on the trial solution of a step of `dt` whose
+    /// deepest closed contact is `deepest`, `max_pen` deep: a violation stops the run
+    /// before the step is committed, or is recorded, as the run's options say. Reads
+    /// the state only, and updates the energy balance.
+    fn guard(&mut self, dt: f64, max_pen: f64, deepest: Option<usize>) -> Result<(), SimError> {
+        let p = &self.model.params;
+        let dynamic = p.mode == Mode::Dynamic;
+        let gravity = if self.effects.gravity {
+            p.gravity.unwrap_or(DVec2::ZERO)
+        } else {
+            DVec2::ZERO
+        };
+        let (mut mechanical, mut work) = (0.0, 0.0);
+        let mut gains = std::mem::take(&mut self.gains);
+        gains.clear();
+        for (f, &i) in self.free_blocks.iter().enumerate() {
+            let i = i as usize;
+            let (d, b, s) = (&self.d[i], &self.blocks[i], &self.shapes[i]);
+            let mat = self.model.materials[self.material[i] as usize];
+            let mass = &self.mass[f];
+            let area = mass[0][0] / mat.density;
+            let ke = if dynamic {
+                let v: Vec6 = std::array::from_fn(|a| 2.0 * d[a] / dt - b.velocity[a]);
+                guard::kinetic(mass, &v)
+            } else {
+                0.0
+            };
+            let mut u = 0.0;
+            if self.effects.elasticity {
+                let e = elasticity(mat.young, mat.poisson);
+                let stress: [f64; 3] = std::array::from_fn(|a| {
+                    b.stress[a] + (0..3).map(|q| e[a][q] * d[3 + q]).sum::<f64>()
+                });
+                u = guard::strain(area, &stress, mat.young, mat.poisson);
+            }
+            mechanical += ke + u;
+            work += mat.density * area * gravity.dot(DVec2::new(d[0], d[1]));
+            for &(at, force) in &b.loads {
+                work += force.dot(point_displacement(at, s.centroid, d));
+            }
+            gains.push((ke - guard::kinetic(mass, &b.velocity), i));
+        }
+        let supplied = self.energy.supplied + work;
+        let reference = self.energy.supplied_max.max(supplied) + self.energy_floor;
+        let excess = mechanical - supplied;
+        let ratio = if reference > 0.0 {
+            excess / reference
+        } else if excess > 0.0 {
+            f64::INFINITY
+        } else {
+            0.0
+        };
+        let id = |i: usize| self.model.blocks[i].id.clone();
+        let mut broken = Vec::new();
+        if max_pen > p.d_tol {
+            let (what, blocks) = match deepest.map(|k| self.contacts.contacts[k].key) {
+                Some(k) => (
+                    format!(
+                        "penetration {max_pen:.3e} m beyond the contact tolerance {:.3e} m, \
+                         vertex {} of `{}` into edge {} of `{}`: analysis.normal_penalty \
+                         ({:.3e} N/m) is too soft for this motion, or d_tol too small",
+                        p.d_tol,
+                        k.vertex,
+                        id(k.vertex_block as usize),
+                        k.edge,
+                        id(k.edge_block as usize),
+                        p.normal_penalty
+                    ),
+                    vec![id(k.vertex_block as usize), id(k.edge_block as usize)],
+                ),
+                None => (String::new(), Vec::new()),
+            };
+            broken.push(("penetration", what, blocks, max_pen));
+        }
+        if ratio > ENERGY_TOLERANCE {
+            gains.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+            let blocks: Vec<String> = gains.iter().take(3).map(|g| id(g.1)).collect();
+            let what = format!(
+                "energy created: kinetic + strain energy {mechanical:.4e} J/m exceeds the \
+                 energy supplied ({supplied:.4e} J/m: initial energy and the work of \
+                 gravity and loads) by {:.2}% of the reference {reference:.4e} J/m (more \
+                 than {}%); the fastest-gaining blocks: {}",
+                100.0 * ratio,
+                100.0 * ENERGY_TOLERANCE,
+                blocks.join(", ")
+            );
+            broken.push(("energy", what, blocks, ratio));
+        }
+        self.gains = gains;
+        if let Some((_, what, blocks, _)) = broken.first()
+            && self.options.stop_on_violation
+        {
+            return Err(SimError::BrokenPhysics {
+                t: self.t,
+                what: what.clone(),
+                blocks: blocks.clone(),
+            });
+        }
+        for (kind, what, _, worst) in broken {
+            match self.violations.iter_mut().find(|v| v.kind == kind) {
+                Some(v) => {
+                    v.steps += 1;
+                    v.worst = v.worst.max(worst);
+                }
+                None => self.violations.push(Violation {
+                    kind: kind.to_string(),
+                    first: what,
+                    first_t: self.t,
+                    steps: 1,
+                    worst,
+                }),
+            }
+        }
+        self.energy.supplied = supplied;
+        self.energy.supplied_max = self.energy.supplied_max.max(supplied);
+        self.energy.worst_ratio = self.energy.worst_ratio.max(ratio);
+        Ok(())
     }
 
     /// Kinetic energy of the free blocks, 1/2 V^T M V.

@@ -12,7 +12,9 @@
 pub mod checkpoint;
 pub mod effects;
 pub mod engine;
+pub mod guard;
 pub mod kinematics;
+pub mod limits;
 mod locate;
 pub mod scene;
 pub mod springs;
@@ -26,6 +28,7 @@ pub use self::engine::{
     BlockSnapshot, BlockState, ContactNote, Diagnosis, RunOptions, SimError, Simulation, Snapshot,
     StepRecord, Totals,
 };
+pub use self::guard::{ENERGY_TOLERANCE, EnergyBalance, Violation};
 pub use self::locate::LineIndex;
 pub use self::scene::{Format, Invalid, Model, Scene, SceneError};
 pub use self::summary::{BlockSummary, Seconds, Summary};

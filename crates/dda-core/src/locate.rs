@@ -29,7 +29,7 @@ impl LineIndex {
             bytes: text.as_bytes(),
             pos: 0,
         };
-        scan.value("", &starts, &mut index);
+        scan.document(&starts, &mut index);
         index
     }
 
@@ -103,8 +103,72 @@ pub(crate) fn line_at(text: &str, offset: usize) -> usize {
     line_of(&line_starts(text), offset)
 }
 
+/// How deep arrays and tables nest in a scene text, scanned once in linear time
+/// outside strings and comments (TOML's basic, literal and multi-line strings and `#`
+/// comments; JSON's strings), or the 1-based line where the nesting first passes
+/// `limit`. Run before either parser, so that no parser, nor the line index, meets a
+/// document deeper than that.
+pub(crate) fn nesting_beyond(text: &str, toml: bool, limit: usize) -> Option<usize> {
+    let b = text.as_bytes();
+    let (mut i, mut depth, mut line) = (0usize, 0usize, 1usize);
+    while i < b.len() {
+        match b[i] {
+            b'\n' => line += 1,
+            b'[' | b'{' => {
+                depth += 1;
+                if depth > limit {
+                    return Some(line);
+                }
+            }
+            b']' | b'}' => depth = depth.saturating_sub(1),
+            b'#' if toml => {
+                while i < b.len() && b[i] != b'\n' {
+                    i += 1;
+                }
+                continue;
+            }
+            q @ (b'"' | b'\'') if toml || q == b'"' => {
+                let triple = toml && b[i..].starts_with(&[q, q, q]);
+                let escapes = q == b'"';
+                i += if triple { 3 } else { 1 };
+                // Every pass of this loop moves on at least one byte.
+                while i < b.len() {
+                    if escapes && b[i] == b'\\' {
+                        i += 2;
+                        continue;
+                    }
+                    if b[i] == b'\n' {
+                        line += 1;
+                        if !triple {
+                            break;
+                        }
+                    }
+                    if b[i] == q && (!triple || b[i..].starts_with(&[q, q, q])) {
+                        i += if triple { 3 } else { 1 };
+                        break;
+                    }
+                    i += 1;
+                }
+                continue;
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    None
+}
+
+/// What a [`JsonScan`] is inside: an object, or an array with its next element's index.
+enum Open {
+    Object(String),
+    Array(String, usize),
+}
+
 /// A forgiving JSON scanner that records where each key and array element starts; it
-/// stops quietly at malformed input (the parser reports that error itself).
+/// stops quietly at malformed input (the parser reports that error itself). Iterative,
+/// with its own stack no deeper than [`crate::limits::MAX_NESTING`], and every pass of
+/// its loop consumes at least one byte, so it ends in time linear in the text whatever
+/// the text is.
 struct JsonScan<'a> {
     bytes: &'a [u8],
     pos: usize,
@@ -143,64 +207,74 @@ impl JsonScan<'_> {
         None
     }
 
-    fn value(&mut self, path: &str, starts: &[usize], index: &mut LineIndex) -> Option<()> {
-        self.skip_ws();
-        match self.peek()? {
-            b'{' => {
-                self.pos += 1;
-                loop {
-                    self.skip_ws();
-                    match self.peek()? {
-                        b'}' => {
-                            self.pos += 1;
-                            return Some(());
-                        }
-                        b',' => self.pos += 1,
-                        b'"' => {
-                            let line = line_of(starts, self.pos);
-                            let key = self.string()?;
-                            let p = join_key(path, &key);
-                            index.insert(p.clone(), line);
-                            self.skip_ws();
-                            if self.peek()? != b':' {
-                                return None;
-                            }
-                            self.pos += 1;
-                            self.value(&p, starts, index)?;
-                        }
-                        _ => return None,
+    /// Scans a scalar (number, literal or string) at `pos`, consuming at least a byte.
+    fn scalar(&mut self) -> Option<()> {
+        if self.peek()? == b'"' {
+            return self.string().map(|_| ());
+        }
+        let start = self.pos;
+        while self.peek().is_some_and(|b| {
+            !matches!(b, b',' | b'}' | b']' | b'{' | b'[' | b':' | b'"') && !b.is_ascii_whitespace()
+        }) {
+            self.pos += 1;
+        }
+        (self.pos > start).then_some(())
+    }
+
+    /// Scans the document, recording key and element lines into `index`.
+    fn document(&mut self, starts: &[usize], index: &mut LineIndex) -> Option<()> {
+        let mut stack: Vec<Open> = Vec::new();
+        // The path of the value about to be read, when one is expected.
+        let mut pending: Option<String> = Some(String::new());
+        loop {
+            self.skip_ws();
+            if let Some(path) = pending.take() {
+                match self.peek()? {
+                    // Paths grow with the depth: beyond the nesting a scene may have
+                    // (refused before parsing), the scan stops rather than build them.
+                    b'{' | b'[' if stack.len() >= crate::limits::MAX_NESTING => return None,
+                    b'{' => {
+                        self.pos += 1;
+                        stack.push(Open::Object(path));
                     }
-                }
-            }
-            b'[' => {
-                self.pos += 1;
-                let mut i = 0;
-                loop {
-                    self.skip_ws();
-                    match self.peek()? {
-                        b']' => {
-                            self.pos += 1;
-                            return Some(());
-                        }
-                        b',' => self.pos += 1,
-                        _ => {
-                            let p = format!("{path}[{i}]");
-                            index.insert(p.clone(), line_of(starts, self.pos));
-                            self.value(&p, starts, index)?;
-                            i += 1;
-                        }
+                    b'[' => {
+                        self.pos += 1;
+                        stack.push(Open::Array(path, 0));
                     }
+                    _ => self.scalar()?,
                 }
+                continue;
             }
-            b'"' => self.string().map(|_| ()),
-            _ => {
-                while self
-                    .peek()
-                    .is_some_and(|b| !matches!(b, b',' | b'}' | b']') && !b.is_ascii_whitespace())
-                {
+            let top = stack.last_mut()?;
+            let byte = self.peek()?;
+            match (top, byte) {
+                (Open::Object(_), b'}') | (Open::Array(..), b']') => {
                     self.pos += 1;
+                    stack.pop();
+                    if stack.is_empty() {
+                        return Some(());
+                    }
                 }
-                Some(())
+                (_, b',') => self.pos += 1,
+                (Open::Object(path), b'"') => {
+                    let line = line_of(starts, self.pos);
+                    let key = self.string()?;
+                    let p = join_key(path, &key);
+                    index.insert(p.clone(), line);
+                    self.skip_ws();
+                    if self.peek()? != b':' {
+                        return None;
+                    }
+                    self.pos += 1;
+                    pending = Some(p);
+                }
+                (Open::Array(path, i), _) => {
+                    let p = format!("{path}[{i}]");
+                    *i += 1;
+                    index.insert(p.clone(), line_of(starts, self.pos));
+                    pending = Some(p);
+                }
+                _ => return None,
             }
         }
     }
@@ -234,5 +308,45 @@ mod tests {
         assert_eq!(ix.line("blocks[0].id"), Some(5));
         assert_eq!(ix.line("blocks[0].vertices[1]"), Some(7));
         assert_eq!(ix.line("nothing"), None);
+    }
+
+    /// Malformed JSON ends the scan: each of these once made it loop or recurse without
+    /// end. An element of an array that cannot start a value (`}` in `[}`) is consumed
+    /// by no branch, so the scan must stop there.
+    #[test]
+    fn malformed_json_ends_the_scan() {
+        for text in [
+            "[}",
+            "{\"a\":[}",
+            "{\"a\" 1}",
+            "[1 2 }",
+            "{\"a\":",
+            "]]]",
+            "{:}",
+        ] {
+            let _ = LineIndex::json(text);
+        }
+        let deep = "[".repeat(100_000);
+        let _ = LineIndex::json(&deep);
+    }
+
+    /// The nesting scan counts brackets outside strings and comments only.
+    #[test]
+    fn nesting_is_counted_outside_strings_and_comments() {
+        assert_eq!(nesting_beyond("a = [[1]]", true, 2), None);
+        assert_eq!(nesting_beyond("a = [[[1]]]", true, 2), Some(1));
+        assert_eq!(nesting_beyond("a = \"[[[\" # [[[\nb = 1", true, 1), None);
+        assert_eq!(
+            nesting_beyond("a = \'\'\'\n[[[\'\'\'\nb = [[[1]]]", true, 2),
+            Some(3)
+        );
+        assert_eq!(
+            nesting_beyond("{\"a\": \"[[\\\"[\", \"b\": [[1]]}", false, 2),
+            Some(1)
+        );
+        assert_eq!(
+            nesting_beyond("{\"a\": \"[[\\\"[\", \"b\": [[1]]}", false, 3),
+            None
+        );
     }
 }

@@ -2,7 +2,8 @@
 //! [`Scene`] and validated into a [`Model`] the engine runs. Unknown keys and invalid
 //! values are errors naming the file, the key path and the line.
 
-use crate::locate::{LineIndex, line_at};
+use crate::limits::{self, Range};
+use crate::locate::{LineIndex, line_at, nesting_beyond};
 use dda_geom::{ConvexPolygon, DVec2, PolygonError, PolygonOptions, separation};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -80,7 +81,11 @@ pub struct Analysis {
     #[serde(default = "default_detector")]
     pub detector: String,
     /// Body acceleration (gx, gy), m/s^2; no key, no gravity effect.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "exact::option"
+    )]
     pub gravity: Option<[f64; 2]>,
     /// Deformable blocks (6 DOF) or rigid (3 DOF).
     #[serde(default = "default_true")]
@@ -149,8 +154,10 @@ pub struct Joint {
 #[serde(deny_unknown_fields)]
 pub struct Load {
     /// Point of application, m.
+    #[serde(deserialize_with = "exact::array")]
     pub at: [f64; 2],
     /// Force, N.
+    #[serde(deserialize_with = "exact::array")]
     pub force: [f64; 2],
 }
 
@@ -162,25 +169,38 @@ pub struct BlockSpec {
     pub id: String,
     /// Material name.
     pub material: String,
-    /// Vertices `[x, y]`, either orientation.
+    /// Vertices `[x, y]`, counter-clockwise.
+    #[serde(deserialize_with = "exact::list")]
     pub vertices: Vec<[f64; 2]>,
     /// Whether the block is fixed (its DOFs are eliminated).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub fixed: bool,
     /// Initial centroid velocity, m/s.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "exact::option"
+    )]
     pub velocity: Option<[f64; 2]>,
     /// Initial angular velocity, rad/s.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub angular_velocity: Option<f64>,
     /// Initial stress (sx, sy, txy), Pa.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "exact::option"
+    )]
     pub stress: Option<[f64; 3]>,
     /// Point loads.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub loads: Vec<Load>,
     /// Points of the block held at their place by stiff springs.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[serde(
+        default,
+        skip_serializing_if = "Vec::is_empty",
+        deserialize_with = "exact::list"
+    )]
     pub fixed_points: Vec<[f64; 2]>,
 }
 
@@ -278,6 +298,17 @@ impl Scene {
         format: Format,
         file: &str,
     ) -> Result<(Scene, Model, LineIndex), SceneError> {
+        if let Some(line) = nesting_beyond(text, format == Format::Toml, limits::MAX_NESTING) {
+            return Err(SceneError {
+                file: file.to_string(),
+                key: String::new(),
+                line: Some(line),
+                message: format!(
+                    "arrays and tables nest deeper than {} levels (a scene needs 4)",
+                    limits::MAX_NESTING
+                ),
+            });
+        }
         let index = match format {
             Format::Toml => LineIndex::toml(text),
             Format::Json => LineIndex::json(text),
@@ -435,6 +466,13 @@ impl Scene {
             })?;
             blocks.push(b.validate(&key, material)?);
         }
+        if blocks.iter().all(|b| b.fixed) {
+            return Err(invalid(
+                "blocks",
+                "every block is fixed, so nothing can move: mark at least one block \
+                 `fixed = false` (the default)",
+            ));
+        }
         check_start_overlaps(&blocks)?;
         if params.mode == Mode::Static {
             check_static_support(&blocks, params.d_tol)?;
@@ -561,27 +599,21 @@ fn check_static_support(blocks: &[ModelBlock], d_tol: f64) -> Result<(), Invalid
     }
 }
 
-fn finite_positive(key: &str, v: f64) -> Result<f64, Invalid> {
-    if v.is_finite() && v > 0.0 {
+/// `v` if it lies in `range` (see [`crate::limits`]), else the error naming `key`.
+fn within(key: &str, v: f64, range: &Range) -> Result<f64, Invalid> {
+    if range.contains(v) {
         Ok(v)
     } else {
-        Err(invalid(key, format!("must be a positive number, got {v}")))
+        Err(invalid(key, range.message(v)))
     }
 }
 
-fn finite_non_negative(key: &str, v: f64) -> Result<f64, Invalid> {
-    if v.is_finite() && v >= 0.0 {
-        Ok(v)
-    } else {
-        Err(invalid(key, format!("must be zero or positive, got {v}")))
+/// Checks every component of `v` against `range`, naming `key[i]` in the error.
+fn each_within(key: &str, v: &[f64], range: &Range) -> Result<(), Invalid> {
+    for (i, &x) in v.iter().enumerate() {
+        within(&format!("{key}[{i}]"), x, range)?;
     }
-}
-
-fn finite_vec(key: &str, v: &[f64]) -> Result<(), Invalid> {
-    match v.iter().position(|x| !x.is_finite()) {
-        Some(i) => Err(invalid(format!("{key}[{i}]"), "must be a finite number")),
-        None => Ok(()),
-    }
+    Ok(())
 }
 
 /// The validated analysis settings, in SI units and radians.
@@ -622,27 +654,39 @@ pub struct Params {
 impl Analysis {
     fn validate(&self) -> Result<Params, Invalid> {
         let k = |s: &str| format!("analysis.{s}");
-        let duration = finite_positive(&k("duration"), self.duration)?;
-        let dt0 = finite_positive(&k("time_step"), self.time_step)?;
-        let d_max = finite_positive(&k("max_displacement"), self.max_displacement)?;
-        let theta_deg = finite_positive(&k("max_rotation_deg"), self.max_rotation_deg)?;
-        if theta_deg > 30.0 {
+        let duration = within(&k("duration"), self.duration, &limits::DURATION)?;
+        let dt0 = within(&k("time_step"), self.time_step, &limits::TIME_STEP)?;
+        if duration / dt0 > limits::MAX_NOMINAL_STEPS {
             return Err(invalid(
-                k("max_rotation_deg"),
-                format!("must be at most 30 degrees per step, got {theta_deg}"),
+                k("duration"),
+                format!(
+                    "{duration:e} s is more than {:e} steps of the time step {dt0:e} s; \
+                     shorten the run or lengthen analysis.time_step",
+                    limits::MAX_NOMINAL_STEPS
+                ),
             ));
         }
+        let d_max = within(
+            &k("max_displacement"),
+            self.max_displacement,
+            &limits::TOLERANCE,
+        )?;
+        let theta_deg = within(
+            &k("max_rotation_deg"),
+            self.max_rotation_deg,
+            &limits::ROTATION_DEG,
+        )?;
         let d_tol = match self.contact_tolerance {
-            Some(v) => finite_positive(&k("contact_tolerance"), v)?,
+            Some(v) => within(&k("contact_tolerance"), v, &limits::TOLERANCE)?,
             None => 2.0 * d_max,
         };
-        let normal_penalty = finite_positive(&k("normal_penalty"), self.normal_penalty)?;
+        let normal_penalty = within(&k("normal_penalty"), self.normal_penalty, &limits::PENALTY)?;
         let shear_penalty = match self.shear_penalty {
-            Some(v) => finite_positive(&k("shear_penalty"), v)?,
+            Some(v) => within(&k("shear_penalty"), v, &limits::PENALTY)?,
             None => normal_penalty,
         };
         let fixed_penalty = match self.fixed_penalty {
-            Some(v) => finite_positive(&k("fixed_penalty"), v)?,
+            Some(v) => within(&k("fixed_penalty"), v, &limits::FIXED_PENALTY)?,
             None => 100.0 * normal_penalty,
         };
         if dda_contact::detector_by_name(&self.detector).is_err() {
@@ -656,7 +700,7 @@ impl Analysis {
             ));
         }
         if let Some(g) = &self.gravity {
-            finite_vec(&k("gravity"), g)?;
+            each_within(&k("gravity"), g, &limits::GRAVITY)?;
         }
         if self.max_oci == 0 || self.max_oci > 100 {
             return Err(invalid(
@@ -700,7 +744,7 @@ pub struct MaterialProps {
 
 impl Material {
     fn validate(&self, key: &str, params: &Params) -> Result<MaterialProps, Invalid> {
-        let density = finite_positive(&format!("{key}.density"), self.density)?;
+        let density = within(&format!("{key}.density"), self.density, &limits::DENSITY)?;
         if !params.deformable {
             return Ok(MaterialProps {
                 density,
@@ -709,7 +753,7 @@ impl Material {
             });
         }
         let young = match self.young {
-            Some(e) => finite_positive(&format!("{key}.young"), e)?,
+            Some(e) => within(&format!("{key}.young"), e, &limits::YOUNG)?,
             None => {
                 return Err(invalid(
                     format!("{key}.young"),
@@ -778,10 +822,11 @@ impl Joint {
         }
         Ok(JointProps {
             tan_phi: phi.to_radians().tan(),
-            cohesion: finite_non_negative(&format!("{key}.cohesion"), self.cohesion)?,
-            tensile_strength: finite_non_negative(
+            cohesion: within(&format!("{key}.cohesion"), self.cohesion, &limits::STRENGTH)?,
+            tensile_strength: within(
                 &format!("{key}.tensile_strength"),
                 self.tensile_strength,
+                &limits::STRENGTH,
             )?,
         })
     }
@@ -811,7 +856,7 @@ pub struct ModelBlock {
 impl BlockSpec {
     fn validate(&self, key: &str, material: usize) -> Result<ModelBlock, Invalid> {
         for (i, v) in self.vertices.iter().enumerate() {
-            finite_vec(&format!("{key}.vertices[{i}]"), v)?;
+            each_within(&format!("{key}.vertices[{i}]"), v, &limits::COORDINATE)?;
         }
         // Strict: clockwise order and collinear vertices are reported, not repaired.
         let coords: Vec<DVec2> = self.vertices.iter().map(|&c| DVec2::from(c)).collect();
@@ -828,28 +873,28 @@ impl BlockSpec {
             })?;
         let mut velocity = [0.0; 6];
         if let Some(v) = &self.velocity {
-            finite_vec(&format!("{key}.velocity"), v)?;
+            each_within(&format!("{key}.velocity"), v, &limits::SPEED)?;
             velocity[0] = v[0];
             velocity[1] = v[1];
         }
         if let Some(w) = self.angular_velocity {
-            finite_vec(&format!("{key}.angular_velocity"), &[w])?;
+            within(&format!("{key}.angular_velocity"), w, &limits::SPIN)?;
             velocity[2] = w;
         }
         let mut stress = [0.0; 3];
         if let Some(s) = &self.stress {
-            finite_vec(&format!("{key}.stress"), s)?;
+            each_within(&format!("{key}.stress"), s, &limits::STRESS)?;
             stress = *s;
         }
         let mut loads = Vec::new();
         for (i, l) in self.loads.iter().enumerate() {
-            finite_vec(&format!("{key}.loads[{i}].at"), &l.at)?;
-            finite_vec(&format!("{key}.loads[{i}].force"), &l.force)?;
+            each_within(&format!("{key}.loads[{i}].at"), &l.at, &limits::COORDINATE)?;
+            each_within(&format!("{key}.loads[{i}].force"), &l.force, &limits::FORCE)?;
             loads.push((DVec2::from(l.at), DVec2::from(l.force)));
         }
         let mut fixed_points = Vec::new();
         for (i, p) in self.fixed_points.iter().enumerate() {
-            finite_vec(&format!("{key}.fixed_points[{i}]"), p)?;
+            each_within(&format!("{key}.fixed_points[{i}]"), p, &limits::COORDINATE)?;
             fixed_points.push(DVec2::from(*p));
         }
         Ok(ModelBlock {
@@ -893,5 +938,44 @@ impl Model {
     /// The joint acting between blocks of materials `ma` and `mb`.
     pub fn joint_of_materials(&self, ma: usize, mb: usize) -> &JointProps {
         &self.joints[self.joint_of[ma * self.materials.len() + mb] as usize]
+    }
+}
+
+/// Deserialisers of fixed-length number arrays that refuse a wrong length in every
+/// format (TOML's reader otherwise drops the extra components of `[1, 2, 3]` read as a
+/// point), naming the array's position in the error path.
+mod exact {
+    use serde::de::{Deserialize, Deserializer, Error};
+
+    /// `[f64; N]` read from an array of exactly N numbers.
+    struct Exact<const N: usize>([f64; N]);
+
+    impl<'de, const N: usize> Deserialize<'de> for Exact<N> {
+        fn deserialize<D: Deserializer<'de>>(de: D) -> Result<Self, D::Error> {
+            let v = Vec::<f64>::deserialize(de)?;
+            let n = v.len();
+            v.try_into().map(Exact).map_err(|_| {
+                D::Error::invalid_length(n, &format!("an array of {N} numbers").as_str())
+            })
+        }
+    }
+
+    /// A `[f64; N]` field.
+    pub fn array<'de, D: Deserializer<'de>, const N: usize>(de: D) -> Result<[f64; N], D::Error> {
+        Exact::<N>::deserialize(de).map(|e| e.0)
+    }
+
+    /// An optional `[f64; N]` field (with `#[serde(default)]`).
+    pub fn option<'de, D: Deserializer<'de>, const N: usize>(
+        de: D,
+    ) -> Result<Option<[f64; N]>, D::Error> {
+        Option::<Exact<N>>::deserialize(de).map(|o| o.map(|e| e.0))
+    }
+
+    /// A list of `[f64; N]`.
+    pub fn list<'de, D: Deserializer<'de>, const N: usize>(
+        de: D,
+    ) -> Result<Vec<[f64; N]>, D::Error> {
+        Vec::<Exact<N>>::deserialize(de).map(|v| v.into_iter().map(|e| e.0).collect())
     }
 }

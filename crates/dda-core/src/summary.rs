@@ -39,7 +39,8 @@ pub struct Summary {
     pub detector: String,
     /// Effects assembled.
     pub effects: Vec<String>,
-    /// "completed" or "failed".
+    /// "completed", "failed" (the simulation could not go on, or broke physics),
+    /// "stopped" (`--max-steps` reached before the duration) or "interrupted" (a signal).
     pub status: String,
     /// Why the run stopped early, if it did.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -73,6 +74,13 @@ pub struct Summary {
     pub seconds: Seconds,
     /// Largest penetration after any step, m.
     pub max_penetration: f64,
+    /// The physics guard's largest energy excess: mechanical energy above what the scene
+    /// supplied, over its reference energy (the guard stops a run beyond 0.01).
+    #[serde(default)]
+    pub energy_excess: f64,
+    /// Violations of physics a run went on through (`--keep-going`), in words.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
     /// Blocks at the end.
     pub blocks: Vec<BlockSummary>,
 }
@@ -118,6 +126,8 @@ impl Summary {
                 solve: t.solve_s,
             },
             max_penetration: t.max_penetration,
+            energy_excess: sim.energy_balance().worst_ratio,
+            warnings: sim.violations().iter().map(|v| v.warning()).collect(),
             blocks: sim
                 .model()
                 .blocks

@@ -22,6 +22,11 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::{Par, Side};
 
+/// Columns of the low-rank path's buffer counted in the memory estimate: the engine
+/// keeps at most about this many rank-one terms (its bound on springs changed since a
+/// factorisation) and their right-hand side terms.
+pub const MAX_RANK_COLUMNS: usize = 96;
+
 /// Parallelism of the factorisation and solve: sequential. Measured on the 830-block
 /// column (4,980 unknowns, 2 cores): `Par::rayon(2)` took 11.8 s over 5,617
 /// factorisations against 11.5 s sequential, so threads do not pay at this size.
@@ -37,6 +42,31 @@ pub enum SolveError {
     /// faer could not build the symbolic factorisation.
     #[error("symbolic factorisation failed: {0}")]
     Symbolic(String),
+    /// The factor of the global matrix would not fit in the memory allowed.
+    #[error(
+        "the factor of the global matrix ({unknowns} unknowns) needs about {}, more than \
+         the {} allowed (the memory available, or --max-memory)",
+        bytes(*needed),
+        bytes(*allowed)
+    )]
+    OutOfMemory {
+        /// Unknowns of the system.
+        unknowns: usize,
+        /// Estimated bytes of the factor and its workspace.
+        needed: u64,
+        /// Bytes allowed.
+        allowed: u64,
+    },
+}
+
+/// A byte count in words: bytes, KiB, MiB or GiB.
+fn bytes(n: u64) -> String {
+    match n {
+        0..1024 => format!("{n} bytes"),
+        1024..1_048_576 => format!("{:.1} KiB", n as f64 / 1024.0),
+        1_048_576..1_073_741_824 => format!("{:.1} MiB", n as f64 / 1_048_576.0),
+        _ => format!("{:.2} GiB", n as f64 / 1_073_741_824.0),
+    }
 }
 
 /// Where the block pair (i, j) lives in the storage: an index into the block entries.
@@ -105,6 +135,9 @@ pub struct BlockSystem {
     pub numeric_count: u64,
     /// Number of solves through a low-rank update of the factor.
     pub low_rank_count: u64,
+    /// Most bytes the factor and its workspace may take (None: no bound but the
+    /// allocator's).
+    pub memory_limit: Option<u64>,
 }
 
 impl std::fmt::Debug for BlockSystem {
@@ -151,6 +184,7 @@ impl Default for BlockSystem {
             symbolic_count: 0,
             numeric_count: 0,
             low_rank_count: 0,
+            memory_limit: None,
         }
     }
 }
@@ -259,10 +293,30 @@ impl BlockSystem {
         };
         self.tree = Tree::new(sn);
         let req = symbolic.factorize_numeric_llt_scratch::<f64>(PAR, Default::default());
+        // The factor, its workspace and the low-rank path's kept columns, checked
+        // against the bound before any of it is allocated; then allocated fallibly, so
+        // that a system too large is an error, not an abort.
+        let needed = (symbolic.len_val() as u64 + (2 * MAX_RANK_COLUMNS * n) as u64) * 8
+            + req.size_bytes() as u64;
+        let limit = self.memory_limit;
+        let out_of_memory = |allowed: u64| SolveError::OutOfMemory {
+            unknowns: n,
+            needed,
+            allowed,
+        };
+        if let Some(allowed) = limit
+            && needed > allowed
+        {
+            return Err(out_of_memory(allowed));
+        }
+        let fail = || out_of_memory(limit.unwrap_or(needed));
         self.l_values.clear();
+        self.l_values
+            .try_reserve_exact(symbolic.len_val())
+            .map_err(|_| fail())?;
         self.l_values.resize(symbolic.len_val(), 0.0);
         self.gather = Vec::with_capacity(Factor::new(sn, &self.l_values).max_rows());
-        self.mem = MemBuffer::new(req);
+        self.mem = MemBuffer::try_new(req).map_err(|_| fail())?;
         self.symbolic = Some(symbolic);
         self.symbolic_count += 1;
         Ok(true)

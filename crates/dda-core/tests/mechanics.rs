@@ -333,7 +333,13 @@ fn runs_are_deterministic() {
     let (scene, _) = incline_scene(30.0, 20.0);
     let a = summary_json(&run(&scene));
     let b = summary_json(&run(&scene));
-    let mut single = Simulation::new(scene.validate().unwrap(), RunOptions { parallel: false });
+    let mut single = Simulation::new(
+        scene.validate().unwrap(),
+        RunOptions {
+            parallel: false,
+            ..RunOptions::default()
+        },
+    );
     single.run(|_, _| {}).unwrap();
     assert_eq!(a, b);
     assert_eq!(a, summary_json(&single));
