@@ -1,4 +1,4 @@
-//! The `dda` command: run, check and list scenes (DESIGN 5.2).
+//! The `dda` command: run, check and list scenes (docs/cli.md).
 
 mod cli;
 

@@ -1,4 +1,4 @@
-//! The `dda` command's contract (DESIGN 5.2): outputs, exit codes, overrides, and that bad
+//! The `dda` command's contract (docs/cli.md): outputs, exit codes, overrides, and that bad
 //! input writes nothing.
 
 // A panic is how a test reports failure.

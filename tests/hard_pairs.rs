@@ -9,7 +9,7 @@
 //! elastic), and keep the blocks' geometric overlap within the bound the penalty sets on
 //! the initial kinetic energy E0. No more than E0 (+1%) can be stored in the springs, and
 //! a spring of stiffness p holding a distance d stores p d^2 / 2, so d <= sqrt(2.02 E0 / p)
-//! =: d_E. The spring measures d to first order in the step's motion (DESIGN 3) while
+//! =: d_E. The spring measures d to first order in the step's motion (docs/method.md) while
 //! blocks move with the exact rotation, so the overlap after a step can exceed the
 //! spring's d by the second-order part of the step's gap, d = (P - E0) x (E1 - E0) / l for
 //! vertex P and edge E0 E1 of length l. With B fixed and A turned by theta <= theta_max:
@@ -20,14 +20,14 @@
 //! - the product of the first-order motions, (u_P - u_0) x (u_1 - u_0) / l: with the edge
 //!   on A, u_P = 0, |u_0| <= d_max and |u_1 - u_0| <= theta l; with the edge on B, zero.
 //!
-//! So the overlap is at most d_E + e(theta_max) (r_A + l_A + d_E + d_tol) + d_max theta_max.
-//! That is the bound for rows linearised at step start. The engine linearises at the
-//! step's predicted midpoint (`dda_core::springs`), where the second-order part missed is
-//! q''(D - D_pred) D / 2 rather than q'' D D / 2: no larger while the prediction D_pred
-//! errs by less than the step's own motion D, which we assume here rather than prove.
-//! (The first failure of this test without the second term: two chamfered squares at
-//! 0.1 m/s, theta 1.9 deg per step, overlap 3.4e-5 m against 1.0e-5 m; without the third,
-//! a chamfered square sliding along a 7.5 deg wedge with steps of 16 mm, overlap 5.7e-4 m
+//! So the overlap is at most d_E + e(theta_max) (r_A + l_A + d_E + d_tol) + d_max
+//! theta_max. That is the bound for rows linearised at step start. The engine linearises at
+//! the step's predicted midpoint (`dda_core::springs`), where the second-order part missed
+//! is q''(D - D_pred) D / 2 rather than q'' D D / 2: no larger while the prediction D_pred
+//! errs by less than the step's own motion D, which we assume here rather than prove. (The
+//! first failure of this test without the second term: two chamfered squares at 0.1 m/s,
+//! theta 1.9 deg per step, overlap 3.4e-5 m against 1.0e-5 m; without the third, a
+//! chamfered square sliding along a 7.5 deg wedge with steps of 16 mm, overlap 5.7e-4 m
 //! against 2.4e-4 m.)
 //!
 //! Three properties:

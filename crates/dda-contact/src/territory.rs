@@ -1,7 +1,8 @@
 //! The conventional type-based detectors TB-CD-1 and TB-CD-2 (paper figures 1 and 2).
 //!
-//! The figures are not in the text; this is the reading implemented (DESIGN 4.3). Each
-//! vertex of one block is classified against the other block by *territory*:
+//! The figures are not in the text; this is the reading implemented (docs/method.md,
+//! section 5). Each vertex of one block is classified against the other block by
+//! *territory*:
 //! - type-1 (distance territories): a vertex's territory is the disk of radius d_tol about
 //!   it; an edge's territory is the band |d_n| <= d_tol, r in [0, 1], minus the two disks
 //!   at its ends.

@@ -1,7 +1,7 @@
-//! The effects a scene calls for (DESIGN 1, "simulate only the effects a scene calls
-//! for"): decided once from the validated model, listed at run start and in summary.json.
-//! Each term of the global system belongs to exactly one effect, and the engine assembles
-//! a term only when its effect is on.
+//! The effects a scene calls for ("simulate only the effects a scene calls
+//! for", docs/method.md section 2): decided once from the validated model, listed at run
+//! start and in summary.json. Each term of the global system belongs to exactly one effect,
+//! and the engine assembles a term only when its effect is on.
 
 use crate::scene::{Mode, Model};
 use serde::{Deserialize, Serialize};

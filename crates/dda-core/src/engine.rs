@@ -1,6 +1,6 @@
 //! The time-stepping engine: one step is
 //! blocks -> neighbour pairs -> contacts -> system -> solve -> open-close iteration ->
-//! update (DESIGN 3).
+//! update (docs/method.md).
 //!
 //! - Detection runs once per step at its start. The pattern of the global matrix must hold
 //!   every pair with candidates; it is set to all free neighbour pairs and kept, step
@@ -27,8 +27,8 @@
 //!   (OCI in at most two thirds of the bound, [`easy_oci`]) dt grows by up to 1.25, as
 //!   far as the step's motion scaled with dt stays within 0.8 of d_max and theta_max
 //!   ([`step_growth`]), never past the initial step. The last step is shortened to land
-//!   on `duration`. These factors are our choice: DESIGN 3 and the paper fix only the
-//!   criteria.
+//!   on `duration`. These factors are our choice: Shi's formulation and the paper fix only
+//!   the criteria.
 //! - Update: vertices move by T D with the rotation applied exactly; stresses accumulate
 //!   C (ex, ey, gxy); velocities V <- 2 D / dt - V (dynamic) or 0 (static).
 
@@ -295,7 +295,7 @@ impl Default for RunOptions {
 const PARALLEL_MIN_BLOCKS: usize = 256;
 
 /// Most OCI iterations of an easy step (after which dt may grow): two thirds of the bound
-/// `max_oci`, rounded up (4 of 6). Our choice; DESIGN 3 and the paper fix only the
+/// `max_oci`, rounded up (4 of 6). Our choice; Shi's formulation and the paper fix only the
 /// criteria. In a large column a few of its many contacts change state in almost every
 /// iteration, so a bound of half (3 of 6) held dt back as N grew. Measured with 4 against
 /// 3 (counts, `docs/performance.md`): 111,460 blocks (0.1 s) 954 OCI iterations and 601
@@ -400,7 +400,8 @@ struct Spring {
 }
 
 impl Spring {
-    /// Its row in the attempt whose contact rows are `rows` (see [`Simulation::spring_row`]).
+    /// Its row in the attempt whose contact rows are `rows` (see
+    /// [`Simulation::spring_row`]).
     #[inline]
     fn row(&self, rows: &[Row], set: &ContactSet, shapes: &[BlockShape], half: &[HalfStep]) -> Row {
         let k = self.contact as usize;

@@ -1,6 +1,7 @@
-//! The block displacement function of Shi's DDA (DESIGN 3) and the per-block matrices built
-//! from it: T(x, y), the mass matrix rho * integral(T^T T dA) and the plane elasticity
-//! matrix. Small fixed-size algebra on the stack; a rigid block uses the first 3 columns.
+//! The block displacement function of Shi's DDA (docs/method.md) and the per-block matrices
+//! built from it: T(x, y), the mass matrix rho * integral(T^T T dA) and the plane
+//! elasticity matrix. Small fixed-size algebra on the stack; a rigid block uses the first 3
+//! columns.
 
 use dda_geom::{DVec2, Moments};
 
@@ -10,7 +11,7 @@ pub type Vec6 = [f64; 6];
 pub type Mat6 = [[f64; 6]; 6];
 
 /// The two rows of T(x, y) for point `p` of a block with reference point (centroid) `c`:
-/// `[u v]^T = T D` (DESIGN 3).
+/// `[u v]^T = T D` (docs/method.md).
 #[inline]
 pub fn t_rows(p: DVec2, c: DVec2) -> [Vec6; 2] {
     let (x, y) = (p.x - c.x, p.y - c.y);

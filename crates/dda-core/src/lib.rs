@@ -1,4 +1,4 @@
-//! The implicit 2D DDA engine of dda-rs (Shi 1988; DESIGN 3 and 5).
+//! The implicit 2D DDA engine of dda-rs (Shi 1988; docs/method.md).
 //!
 //! A scene file ([`Scene`]) is validated into a [`Model`]; the [`Effects`] it calls for
 //! decide which terms are assembled; a [`Simulation`] advances it step by step:

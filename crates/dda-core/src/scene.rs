@@ -1,6 +1,6 @@
-//! The scene file (DESIGN 5.1): TOML, or JSON of the same structure, read with serde into
-//! [`Scene`] and validated into a [`Model`] the engine runs. Unknown keys and invalid
-//! values are errors naming the file, the key path and the line.
+//! The scene file (docs/scene-format.md): TOML, or JSON of the same structure, read with
+//! serde into [`Scene`] and validated into a [`Model`] the engine runs. Unknown keys and
+//! invalid values are errors naming the file, the key path and the line.
 
 use crate::limits::{self, Range};
 use crate::locate::{LineIndex, line_at, nesting_beyond};

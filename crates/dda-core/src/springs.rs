@@ -1,4 +1,4 @@
-//! Contact springs as linear constraint rows (DESIGN 3).
+//! Contact springs as linear constraint rows (docs/method.md).
 //!
 //! Every spring of the engine measures one quantity that is, to first order, linear in the
 //! unknowns of at most two blocks: q(D) = g0 + c_a . D_a + c_b . D_b. A spring of
@@ -6,7 +6,7 @@
 //! F_x -= p g0 c_x; a force f along q adds F_x += f c_x. The normal spring, the shear
 //! spring, the friction force and the fixed-point springs are all this one mechanism.
 //!
-//! **Where a contact row is linearised** (our choice; DESIGN 3 takes the gradient at step
+//! **Where a contact row is linearised** (our choice; Shi takes the gradient at step
 //! start). g0 is the value at step start (the normal row divides it by the edge's length
 //! at the half step, see [`normal_row`]); the coefficients c are the gradient at
 //! the step's predicted midpoint: both blocks moved by half their motion at their current
@@ -113,11 +113,11 @@ fn points_at(c: &Contact, p: (DVec2, DVec2, DVec2), half: &[HalfStep]) -> ([DVec
 
 /// The normal distance of a vertex-edge contact after the step, to first order:
 /// d = (S0 + H^T D_i + G^T D_j) / l with S0 = `det[[1,x1,y1],[1,x3,y3],[1,x2,y2]]`
-/// (DESIGN 3; S0 / l is the paper's d_n, eq. 7), H, G and l taken at the half step
-/// `half` (see the module docs). S0 is the step start's; l at the half step equals l at
-/// step start for a rigid motion, and differs by the edge's strain over half a step for a
-/// straining block. Its translational parts are equal and opposite, so the spring
-/// conserves momentum.
+/// (docs/method.md section 4; S0 / l is the paper's d_n, eq. 7), H, G and l taken at the
+/// half step `half` (see the module docs). S0 is the step start's; l at the half step
+/// equals l at step start for a rigid motion, and differs by the edge's strain over half a
+/// step for a straining block. Its translational parts are equal and opposite, so the
+/// spring conserves momentum.
 pub fn normal_row(c: &Contact, shapes: &[BlockShape], half: &[HalfStep]) -> Row {
     let start = contact_points(c, shapes);
     let (p1, p2, p3) = start;
@@ -166,7 +166,7 @@ pub fn shear_row(c: &Contact, shapes: &[BlockShape], half: &[HalfStep], anchor: 
 
 /// Length of the edge a contact's vertex lies against: the cohesion and tensile strength
 /// act over half of it (each end of a face-to-face contact carries half; a choice where
-/// DESIGN 3 and the paper are silent).
+/// Shi's formulation and the paper are silent).
 pub fn contact_length(c: &Contact, shapes: &[BlockShape]) -> f64 {
     0.5 * shapes[c.key.edge_block as usize].lengths[c.key.edge as usize]
 }
@@ -199,8 +199,8 @@ mod tests {
 
     /// Linearised at step start (blocks at rest), the normal row's value equals d_n at
     /// D = 0 and is the first-order expansion of S0 / l with l held at its step-start
-    /// value (DESIGN 3): against the exact S0 after a motion of size h, divided by the
-    /// step-start l, the error is O(h^2).
+    /// value (docs/method.md): against the exact S0 after a motion of size h, divided by
+    /// the step-start l, the error is O(h^2).
     #[test]
     fn normal_row_is_the_linearised_distance() {
         let (a, b, shapes, c) = corner_over_edge();
@@ -232,7 +232,8 @@ mod tests {
     /// for quadratics). Measured by the order of convergence as the motion shrinks tenfold:
     /// the error must shrink at least 10^2.5 times at the half step (10^3 for a cubic term;
     /// the margin covers the fourth-order remainder), and the step-start error at most
-    /// 10^2.5 times (it is quadratic), so that this test fails if the half step is not used.
+    /// 10^2.5 times (it is quadratic), so that this test fails if the half step is not
+    /// used.
     #[test]
     fn rows_at_the_half_step_are_exact_to_second_order() {
         let (a, b, shapes, c) = corner_over_edge();

@@ -1,4 +1,4 @@
-//! The run summary (DESIGN 5.3): the fields other tools read, plus a few more. Timing
+//! The run summary (docs/outputs.md): the fields other tools read, plus a few more. Timing
 //! fields live under `seconds` so that comparisons of two runs can leave them out.
 
 use crate::engine::Simulation;

@@ -451,7 +451,8 @@ impl ConvexPolygon {
 
     /// This polygon moved by the DDA displacement function of a block whose reference point
     /// (its centroid) is `center`, with unknowns `d = (u0, v0, r0, ex, ey, gxy)`
-    /// (DESIGN section 3). The rotation r0 is applied exactly; the strains linearly.
+    /// (docs/method.md, section 1). The rotation r0 is applied exactly; the strains
+    /// linearly.
     pub fn displaced(&self, center: DVec2, d: &[f64; 6]) -> Result<Self, PolygonError> {
         let mut moved = self.clone();
         moved.displace(center, d)?;
@@ -500,14 +501,14 @@ fn apply(m: &[f64; 4], center: DVec2, t: DVec2, p: DVec2) -> DVec2 {
     center + t + DVec2::new(m[0] * r.x + m[1] * r.y, m[2] * r.x + m[3] * r.y)
 }
 
-/// Where the block motion `d` (DESIGN section 3, rotation exact) takes point `p` of a block
-/// whose reference point is `center`.
+/// Where the block motion `d` (docs/method.md section 1, rotation exact) takes point `p` of
+/// a block whose reference point is `center`.
 pub fn displace_point(p: DVec2, center: DVec2, d: &[f64; 6]) -> DVec2 {
     Motion::new(center, d).apply(p)
 }
 
-/// A block motion `d` about `center` (DESIGN section 3, rotation exact) as an affine map,
-/// computed once to move many points (one `sin_cos` instead of one per point).
+/// A block motion `d` about `center` (docs/method.md section 1, rotation exact) as an
+/// affine map, computed once to move many points (one `sin_cos` instead of one per point).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Motion {
     m: [f64; 4],
