@@ -12,8 +12,9 @@
 //! renamed over the target, and the directory flushed, so a run killed at any moment
 //! leaves either the previous checkpoint or the new one, whole.
 
-use crate::engine::{RunOptions, Simulation, Snapshot};
 use crate::scene::Scene;
+use crate::simulation::{RunOptions, Simulation};
+use crate::state::Snapshot;
 use serde::{Deserialize, Serialize};
 use std::io::Write;
 use std::path::{Path, PathBuf};

@@ -17,7 +17,11 @@
 //! What happens on a violation is the run's choice ([`crate::RunOptions`]): stop with
 //! the last good state, or record it and go on.
 
-use crate::kinematics::{Mat6, Vec6};
+use crate::diagnosis::SimError;
+use crate::kinematics::{Mat6, Vec6, elasticity, point_displacement};
+use crate::scene::Mode;
+use crate::simulation::Simulation;
+use dda_geom::DVec2;
 use serde::{Deserialize, Serialize};
 
 /// Fraction of the reference energy (see the module docs) by which the mechanical
@@ -87,6 +91,132 @@ pub fn strain(area: f64, s: &[f64; 3], young: f64, poisson: f64) -> f64 {
     let ey = (s[1] - poisson * s[0]) / young;
     let g = 2.0 * (1.0 + poisson) * s[2] / young;
     0.5 * area * (s[0] * ex + s[1] * ey + s[2] * g)
+}
+
+impl Simulation {
+    /// The physics guard (see `guard`) on the trial solution of a step of `dt` whose
+    /// deepest closed contact is `deepest`, `max_pen` deep: a violation stops the run
+    /// before the step is committed, or is recorded, as the run's options say. Reads
+    /// the state only, and updates the energy balance.
+    pub(crate) fn guard(
+        &mut self,
+        dt: f64,
+        max_pen: f64,
+        deepest: Option<usize>,
+    ) -> Result<(), SimError> {
+        let p = &self.model.params;
+        let dynamic = p.mode == Mode::Dynamic;
+        let gravity = if self.effects.gravity {
+            p.gravity.unwrap_or(DVec2::ZERO)
+        } else {
+            DVec2::ZERO
+        };
+        let (mut mechanical, mut work) = (0.0, 0.0);
+        let mut gains = std::mem::take(&mut self.gains);
+        gains.clear();
+        for (f, &i) in self.free_blocks.iter().enumerate() {
+            let i = i as usize;
+            let (d, b, s) = (&self.d[i], &self.blocks[i], &self.shapes[i]);
+            let mat = self.model.materials[self.material[i] as usize];
+            let mass = &self.mass[f];
+            let area = mass[0][0] / mat.density;
+            let ke = if dynamic {
+                let v: Vec6 = std::array::from_fn(|a| 2.0 * d[a] / dt - b.velocity[a]);
+                kinetic(mass, &v)
+            } else {
+                0.0
+            };
+            let mut u = 0.0;
+            if self.effects.elasticity {
+                let e = elasticity(mat.young, mat.poisson);
+                let stress: [f64; 3] = std::array::from_fn(|a| {
+                    b.stress[a] + (0..3).map(|q| e[a][q] * d[3 + q]).sum::<f64>()
+                });
+                u = strain(area, &stress, mat.young, mat.poisson);
+            }
+            mechanical += ke + u;
+            work += mat.density * area * gravity.dot(DVec2::new(d[0], d[1]));
+            for &(at, force) in &b.loads {
+                work += force.dot(point_displacement(at, s.centroid, d));
+            }
+            gains.push((ke - kinetic(mass, &b.velocity), i));
+        }
+        let supplied = self.energy.supplied + work;
+        let reference = self.energy.supplied_max.max(supplied) + self.energy_floor;
+        let excess = mechanical - supplied;
+        let ratio = if reference > 0.0 {
+            excess / reference
+        } else if excess > 0.0 {
+            f64::INFINITY
+        } else {
+            0.0
+        };
+        let id = |i: usize| self.model.blocks[i].id.clone();
+        let mut broken = Vec::new();
+        if max_pen > p.d_tol {
+            let (what, blocks) = match deepest.map(|k| self.contacts.contacts[k].key) {
+                Some(k) => (
+                    format!(
+                        "penetration {max_pen:.3e} m beyond the contact tolerance {:.3e} m, \
+                         vertex {} of `{}` into edge {} of `{}`: analysis.normal_penalty \
+                         ({:.3e} N/m) is too soft for this motion, or d_tol too small",
+                        p.d_tol,
+                        k.vertex,
+                        id(k.vertex_block as usize),
+                        k.edge,
+                        id(k.edge_block as usize),
+                        p.normal_penalty
+                    ),
+                    vec![id(k.vertex_block as usize), id(k.edge_block as usize)],
+                ),
+                None => (String::new(), Vec::new()),
+            };
+            broken.push(("penetration", what, blocks, max_pen));
+        }
+        if ratio > ENERGY_TOLERANCE {
+            gains.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+            let blocks: Vec<String> = gains.iter().take(3).map(|g| id(g.1)).collect();
+            let what = format!(
+                "energy created: kinetic + strain energy {mechanical:.4e} J/m exceeds the \
+                 energy supplied ({supplied:.4e} J/m: initial energy and the work of \
+                 gravity and loads) by {:.2}% of the reference {reference:.4e} J/m (more \
+                 than {}%); the fastest-gaining blocks: {}",
+                100.0 * ratio,
+                100.0 * ENERGY_TOLERANCE,
+                blocks.join(", ")
+            );
+            broken.push(("energy", what, blocks, ratio));
+        }
+        self.gains = gains;
+        if let Some((_, what, blocks, _)) = broken.first()
+            && self.options.stop_on_violation
+        {
+            return Err(SimError::BrokenPhysics {
+                t: self.t,
+                what: what.clone(),
+                blocks: blocks.clone(),
+            });
+        }
+        for (kind, what, _, worst) in broken {
+            match self.violations.iter_mut().find(|v| v.kind == kind) {
+                Some(v) => {
+                    v.steps += 1;
+                    v.worst = v.worst.max(worst);
+                }
+                None => self.violations.push(Violation {
+                    kind: kind.to_string(),
+                    first: what,
+                    first_t: self.t,
+                    steps: 1,
+                    worst,
+                }),
+            }
+        }
+        self.energy.supplied = supplied;
+        self.energy.supplied_max = self.energy.supplied_max.max(supplied);
+        self.energy.worst_ratio = self.energy.worst_ratio.max(ratio);
+        Ok(())
+    }
 }
 
 #[cfg(test)]

@@ -9,27 +9,35 @@
 // Index loops mirror the matrix formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
+mod assembly;
 pub mod checkpoint;
+mod contact_law;
+mod detection;
+pub mod diagnosis;
 pub mod effects;
-pub mod engine;
 pub mod guard;
 pub mod kinematics;
 pub mod limits;
 mod locate;
+mod model;
+mod open_close;
+mod pattern;
 pub mod scene;
+pub mod simulation;
+pub mod solver;
 pub mod springs;
+pub mod state;
 pub mod summary;
-mod supernodal;
-pub mod system;
+pub mod time_step;
+mod update;
 
 pub use self::checkpoint::{Checkpoint, CheckpointError, OutputMarks};
+pub use self::diagnosis::{ContactNote, Diagnosis, SimError};
 pub use self::effects::Effects;
-pub use self::engine::{
-    BlockSnapshot, BlockState, ContactNote, Diagnosis, RunOptions, SimError, Simulation, Snapshot,
-    StepRecord, Totals,
-};
 pub use self::guard::{ENERGY_TOLERANCE, EnergyBalance, Violation};
 pub use self::locate::LineIndex;
 pub use self::scene::{Format, Invalid, Model, Scene, SceneError};
+pub use self::simulation::{RunOptions, Simulation};
+pub use self::solver::{BlockSystem, RankOne, SolveError};
+pub use self::state::{BlockSnapshot, BlockState, Snapshot, StepRecord, Totals};
 pub use self::summary::{BlockSummary, Seconds, Summary};
-pub use self::system::{BlockSystem, RankOne, SolveError};

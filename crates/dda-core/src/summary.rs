@@ -1,7 +1,7 @@
 //! The run summary (docs/outputs.md): the fields other tools read, plus a few more. Timing
 //! fields live under `seconds` so that comparisons of two runs can leave them out.
 
-use crate::engine::Simulation;
+use crate::simulation::Simulation;
 use serde::{Deserialize, Serialize};
 
 /// Wall-clock seconds of a run, by phase.
@@ -47,7 +47,7 @@ pub struct Summary {
     pub error: Option<String>,
     /// What was involved when the run stopped early, if it did.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub failure: Option<crate::engine::Diagnosis>,
+    pub failure: Option<crate::diagnosis::Diagnosis>,
     /// Simulated time reached, s.
     pub time_simulated: f64,
     /// Completed steps.

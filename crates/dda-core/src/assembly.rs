@@ -1,0 +1,320 @@
+//! Assembly of the global system: each free block's own terms (inertia, elasticity,
+//! gravity, loads, fixed points: [`block_terms`], computed apart from the global
+//! matrix), the contact rows linearised for the attempt, the springs and friction
+//! forces of the current contact states, and their scatter into the block-sparse
+//! matrix and right-hand side.
+
+use crate::diagnosis::SimError;
+use crate::effects::Effects;
+use crate::kinematics::{Mat6, Vec6, along, elasticity, mass_matrix};
+use crate::scene::{JointProps, Model};
+use crate::simulation::Simulation;
+use crate::solver::{BlockSystem, Entry};
+use crate::springs::{HalfStep, Row, contact_length, normal_row, shear_row};
+use crate::state::{BlockState, StepRecord};
+use dda_contact::{BlockShape, ContactSet, ContactState};
+use dda_geom::DVec2;
+use std::time::Instant;
+
+/// Fewest free blocks for which per-block terms are computed on the thread pool (when
+/// [`RunOptions::parallel`] is on): below it, waking the pool costs more than it saves.
+pub(crate) const PARALLEL_MIN_BLOCKS: usize = 256;
+
+/// A spring in effect in an OCI iteration: its contact, whether it is the shear spring
+/// (else the normal one), its penalty, where it couples in the system, and what its row
+/// depends on besides the attempt's geometry: nothing for a normal spring (its row is
+/// the contact's in `rows`), the locked point for a shear spring. Two springs of one
+/// attempt that compare equal have the same row ([`Simulation::spring_row`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Spring {
+    pub(crate) contact: u32,
+    pub(crate) shear: bool,
+    pub(crate) penalty: f64,
+    /// The system entry coupling its two blocks, if both are free.
+    pub(crate) entry: Option<Entry>,
+    /// The shear spring's locked point (ratio along the edge); 0 for a normal spring.
+    pub(crate) anchor: f64,
+}
+
+impl Spring {
+    /// Its row in the attempt whose contact rows are `rows` (see
+    /// [`Simulation::spring_row`]).
+    #[inline]
+    pub(crate) fn row(
+        &self,
+        rows: &[Row],
+        set: &ContactSet,
+        shapes: &[BlockShape],
+        half: &[HalfStep],
+    ) -> Row {
+        let k = self.contact as usize;
+        if self.shear {
+            shear_row(&set.contacts[k], shapes, half, self.anchor)
+        } else {
+            rows[k]
+        }
+    }
+}
+
+/// The row of an inactive contact until it becomes active: NaN, so that a read of it
+/// could not pass unseen.
+pub(crate) const NO_ROW: Row = Row {
+    g0: f64::NAN,
+    blocks: [0, 0],
+    c: [[0.0; 6]; 2],
+};
+
+impl Simulation {
+    /// Per-block terms that do not depend on contacts (see [`block_terms`]), one per free
+    /// block in free-block order. With `parallel` they are computed on the thread pool:
+    /// each block's terms depend on that block alone, so the result is the same.
+    pub(crate) fn base_terms(&mut self, dt: f64) {
+        let n = self.free_blocks.len();
+        self.base_k.resize(n, [[0.0; 6]; 6]);
+        self.base_f.resize(n, [0.0; 6]);
+        self.mass.resize(n, [[0.0; 6]; 6]);
+        let (model, blocks, eff) = (&self.model, &self.blocks, self.effects);
+        let terms = |(((k, f), mass), &i): (((&mut Mat6, &mut Vec6), &mut Mat6), &u32)| {
+            (*k, *f, *mass) = block_terms(model, eff, &blocks[i as usize], i as usize, dt);
+        };
+        #[cfg(feature = "rayon")]
+        if self.options.parallel && n >= PARALLEL_MIN_BLOCKS {
+            use rayon::prelude::*;
+            self.base_k
+                .par_iter_mut()
+                .zip(self.base_f.par_iter_mut())
+                .zip(self.mass.par_iter_mut())
+                .zip(self.free_blocks.par_iter())
+                .for_each(terms);
+            return;
+        }
+        self.base_k
+            .iter_mut()
+            .zip(self.base_f.iter_mut())
+            .zip(self.mass.iter_mut())
+            .zip(self.free_blocks.iter())
+            .for_each(terms);
+    }
+
+    /// The joint of a contact.
+    pub(crate) fn joint(&self, k: usize) -> JointProps {
+        let key = self.contacts.contacts[k].key;
+        let m = |b: u32| self.material[b as usize] as usize;
+        *self
+            .model
+            .joint_of_materials(m(key.vertex_block), m(key.edge_block))
+    }
+
+    /// Sets the half step of every block for an attempt of size `dt` and the contacts'
+    /// normal rows, linearised there (see `springs`).
+    pub(crate) fn linearise(&mut self, dt: f64) {
+        self.half.clear();
+        for (i, s) in self.shapes.iter().enumerate() {
+            self.half.push(match self.free[i] {
+                Some(_) => HalfStep::new(s.centroid, &self.blocks[i].velocity, dt),
+                None => HalfStep::at_rest(s.centroid),
+            });
+        }
+        self.rows.clear();
+        for c in &self.contacts.contacts {
+            self.rows.push(if c.active {
+                normal_row(c, &self.shapes, &self.half)
+            } else {
+                NO_ROW
+            });
+        }
+    }
+
+    /// Collects the springs and friction forces of the current contact states: the active
+    /// closed contacts' normal springs, and, where the joint has shear, locked contacts'
+    /// shear springs and sliding contacts' friction forces.
+    pub(crate) fn collect_springs(&mut self) {
+        self.springs.clear();
+        self.forces.clear();
+        let p = &self.model.params;
+        let (pn, ps) = (p.normal_penalty, p.shear_penalty);
+        for (pk, pc) in self.contacts.pairs.iter().enumerate() {
+            let entry = self.pair_entry[pk];
+            for k in pc.start as usize..pc.end as usize {
+                let c = self.contacts.contacts[k];
+                if !(c.active && c.state.is_closed()) {
+                    continue;
+                }
+                let contact = k as u32;
+                self.springs.push(Spring {
+                    contact,
+                    shear: false,
+                    penalty: pn,
+                    entry,
+                    anchor: 0.0,
+                });
+                let j = self.joint(k);
+                if !j.has_shear() {
+                    continue;
+                }
+                match c.state {
+                    ContactState::Locked => {
+                        self.springs.push(Spring {
+                            contact,
+                            shear: true,
+                            penalty: ps,
+                            entry,
+                            anchor: c.locked_r,
+                        });
+                    }
+                    ContactState::Sliding if c.slide_dir != 0.0 => {
+                        let mut limit = c.normal_force.max(0.0) * j.tan_phi;
+                        if c.bonded {
+                            limit += j.cohesion * contact_length(&c, &self.shapes);
+                        }
+                        let row = shear_row(&c, &self.shapes, &self.half, c.r.clamp(0.0, 1.0));
+                        self.forces.push((contact, -c.slide_dir * limit, row));
+                    }
+                    _ => {}
+                }
+            }
+        }
+    }
+
+    /// The row of spring `s` in this attempt: the contact's normal row, or its shear row
+    /// at the spring's locked point (computed again, by the same function on the same
+    /// geometry, so the same bits).
+    #[inline]
+    pub(crate) fn spring_row(&self, s: &Spring) -> Row {
+        s.row(&self.rows, &self.contacts, &self.shapes, &self.half)
+    }
+
+    /// Adds the right-hand side of the base terms, the springs and the forces.
+    pub(crate) fn assemble_rhs(&mut self) {
+        for (f, rhs) in self.base_f.iter().enumerate() {
+            self.system.add_rhs(f as u32, 1.0, rhs);
+        }
+        for s in &self.springs {
+            let row = self.spring_row(s);
+            for (b, c) in row.blocks.iter().zip(&row.c) {
+                if let Some(f) = self.free[*b as usize] {
+                    self.system.add_rhs(f, -s.penalty * row.g0, c);
+                }
+            }
+        }
+        for (_, f, row) in &self.forces {
+            for (b, c) in row.blocks.iter().zip(&row.c) {
+                if let Some(fi) = self.free[*b as usize] {
+                    self.system.add_rhs(fi, *f, c);
+                }
+            }
+        }
+    }
+
+    /// Assembles K (base terms and springs) and F, and factorises and solves.
+    pub(crate) fn assemble_and_factorise(&mut self, rec: &mut StepRecord) -> Result<(), SimError> {
+        let t0 = Instant::now();
+        self.system.clear();
+        for (f, k) in self.base_k.iter().enumerate() {
+            self.system.add_diagonal(f as u32, k);
+        }
+        for s in &self.springs {
+            let row = self.spring_row(s);
+            add_spring(&mut self.system, &self.free, s.entry, s.penalty, &row);
+        }
+        self.assemble_rhs();
+        let t1 = Instant::now();
+        rec.assembly_s += (t1 - t0).as_secs_f64();
+        self.system
+            .solve()
+            .map_err(|source| SimError::Solve { t: self.t, source })?;
+        rec.solve_s += t1.elapsed().as_secs_f64();
+        self.factored_springs.clone_from(&self.springs);
+        self.factored_forces.clone_from(&self.forces);
+        self.factor_current = true;
+        Ok(())
+    }
+}
+
+/// A free block's terms that do not depend on contacts, at step size `dt`: its stiffness
+/// (inertia 2/dt^2 M, elasticity, fixed-point springs), right-hand side (inertia 2/dt M V,
+/// initial stress, gravity, point loads, fixed points) and mass matrix M (each only if
+/// its effect is on).
+pub(crate) fn block_terms(
+    model: &Model,
+    eff: Effects,
+    b: &BlockState,
+    i: usize,
+    dt: f64,
+) -> (Mat6, Vec6, Mat6) {
+    let p = &model.params;
+    let m = b.polygon.moments();
+    let mat = model.materials[model.blocks[i].material];
+    let mass = mass_matrix(&m, mat.density);
+    let mut k = [[0.0; 6]; 6];
+    let mut f = [0.0; 6];
+    // Inertia (constant acceleration): 2/dt^2 M, and 2/dt M V when dynamic.
+    let c2 = 2.0 / (dt * dt);
+    for a in 0..6 {
+        for bb in 0..6 {
+            k[a][bb] += c2 * mass[a][bb];
+        }
+    }
+    if eff.inertia {
+        let c1 = 2.0 / dt;
+        for a in 0..6 {
+            f[a] += c1 * (0..6).map(|bb| mass[a][bb] * b.velocity[bb]).sum::<f64>();
+        }
+    }
+    if eff.elasticity {
+        let e = elasticity(mat.young, mat.poisson);
+        for a in 0..3 {
+            for bb in 0..3 {
+                k[3 + a][3 + bb] += m.area * e[a][bb];
+            }
+            f[3 + a] -= m.area * b.stress[a];
+        }
+    }
+    if eff.gravity
+        && let Some(g) = p.gravity
+    {
+        f[0] += mat.density * g.x * m.area;
+        f[1] += mat.density * g.y * m.area;
+    }
+    for &(at, force) in &b.loads {
+        let r = along(force, at, m.centroid);
+        for a in 0..6 {
+            f[a] += r[a];
+        }
+    }
+    for &(now, place) in &b.fixed_points {
+        // Two rows (x and y) of a spring pulling the point to its place.
+        for dir in [DVec2::X, DVec2::Y] {
+            let r = along(dir, now, m.centroid);
+            let g0 = (now - place).dot(dir);
+            for a in 0..6 {
+                f[a] -= p.fixed_penalty * g0 * r[a];
+                for bb in 0..6 {
+                    k[a][bb] += p.fixed_penalty * r[a] * r[bb];
+                }
+            }
+        }
+    }
+    (k, f, mass)
+}
+
+/// Adds the stiffness of the spring p q^2 / 2 of `row` to the matrix (fixed blocks
+/// contribute nothing); its right-hand side comes with [`Simulation::assemble_rhs`].
+pub(crate) fn add_spring(
+    sys: &mut BlockSystem,
+    free: &[Option<u32>],
+    pair_entry: Option<Entry>,
+    p: f64,
+    row: &Row,
+) {
+    let fa = free[row.blocks[0] as usize];
+    let fb = free[row.blocks[1] as usize];
+    for (f, c) in [(fa, &row.c[0]), (fb, &row.c[1])] {
+        if let Some(f) = f {
+            sys.add_outer(sys.diagonal(f), f, f, p, c, c);
+        }
+    }
+    if let (Some(a), Some(b), Some(e)) = (fa, fb, pair_entry) {
+        sys.add_outer(e, a, b, p, &row.c[0], &row.c[1]);
+    }
+}

@@ -1,0 +1,58 @@
+//! Detection at step start: the neighbour pairs (a sort-and-sweep broad phase reused
+//! within a skin), each pair's candidate contacts from the detector with states
+//! inherited from the previous step, then the engine's normalisation of states.
+
+use crate::simulation::Simulation;
+use dda_contact::ContactState;
+
+/// The neighbour search's skin, in d_max: its pairs are found for d_tol plus twice the
+/// skin and reused while no block's box has moved by more than the skin
+/// ([`NeighbourSearch::with_skin`]). The pairs are the same whatever the skin; only
+/// the number of sweeps changes. Measured on paper 5.2b (826 blocks, 844 steps): skins
+/// of 1, 2, 3 and 5 d_max swept at 416, 289, 222 and 162 steps, and the search took
+/// 0.81%, 0.60%, 0.61% and 0.48% of the run's samples against 1.20% sweeping every
+/// step; at r_tol = 10, 1 and 2 d_max swept 68 and 38 times in 635 steps, 0.38% and
+/// 0.44% against 0.87%.
+pub(crate) const NEIGHBOUR_SKIN: f64 = 2.0;
+
+impl Simulation {
+    /// Step-start detection with states inherited from the previous step, then the
+    /// engine's normalisation: closed contacts of frictionless joints slide (no shear
+    /// spring), and at t = 0 closed contacts of bonding joints start bonded.
+    pub(crate) fn detect_step_start(&mut self) {
+        self.aabbs.clear();
+        self.aabbs.extend(self.shapes.iter().map(|s| s.aabb));
+        self.neighbours
+            .find(&self.aabbs, self.detection.d_tol, &mut self.pairs);
+        let free = &self.free;
+        self.pairs
+            .retain(|p| free[p.a as usize].is_some() || free[p.b as usize].is_some());
+        std::mem::swap(&mut self.prev, &mut self.contacts);
+        dda_contact::detect(
+            self.detector.as_ref(),
+            &self.shapes,
+            &self.pairs,
+            &self.detection,
+            &self.prev,
+            self.options.parallel,
+            &mut self.contacts,
+        );
+        let first = self.totals.steps == 0;
+        for k in 0..self.contacts.contacts.len() {
+            // Open contacts are left as they are: only closed ones need their joint.
+            if !self.contacts.contacts[k].state.is_closed() {
+                continue;
+            }
+            let j = self.joint(k);
+            let c = &mut self.contacts.contacts[k];
+            if !j.has_shear() {
+                c.state = ContactState::Sliding;
+            }
+            if first && c.active && c.state.is_closed() && j.bonds() {
+                c.bonded = true;
+            }
+        }
+        self.track_list
+            .rebuild(self.detector.as_ref(), &self.shapes, &self.contacts);
+    }
+}

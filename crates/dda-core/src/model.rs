@@ -1,0 +1,546 @@
+//! The model a scene is validated into: every value checked against its admissible
+//! range (`limits`), names resolved to indices, polygons built, the start checked
+//! (no overlaps; in a static analysis, every free block supported).
+
+use crate::limits::{self, Range};
+use crate::scene::{Analysis, BlockSpec, Invalid, Joint, Material, Mode, Plane, Scene, invalid};
+use dda_geom::{ConvexPolygon, DVec2, PolygonError, PolygonOptions, separation};
+use std::collections::BTreeMap;
+
+impl Scene {
+    /// Checks every value and builds the model the engine runs.
+    pub fn validate(&self) -> Result<Model, Invalid> {
+        if self.name.trim().is_empty() {
+            return Err(invalid("name", "must not be empty"));
+        }
+        let params = self.analysis.validate()?;
+        let mut names: Vec<&String> = self.materials.keys().collect();
+        names.sort();
+        let mut materials = Vec::new();
+        for name in &names {
+            let m = &self.materials[*name];
+            let key = format!("materials.{name}");
+            materials.push(m.validate(&key, &params)?);
+        }
+        let mat_index =
+            |name: &str| -> Option<usize> { names.iter().position(|n| n.as_str() == name) };
+
+        // Joint table: `default` everywhere, then `between` joints on their pairs.
+        let nm = names.len();
+        let mut joints = vec![JointProps::default()];
+        let mut joint_of = vec![0u16; nm * nm];
+        if let Some(j) = self.joints.get("default") {
+            if j.between.is_some() {
+                return Err(invalid(
+                    "joints.default.between",
+                    "the default joint applies to every pair; name another joint to restrict it",
+                ));
+            }
+            joints[0] = j.validate("joints.default")?;
+        }
+        for (name, j) in &self.joints {
+            if name == "default" {
+                continue;
+            }
+            let key = format!("joints.{name}");
+            let Some([m1, m2]) = &j.between else {
+                return Err(invalid(
+                    format!("{key}.between"),
+                    "a joint other than `default` needs `between = [material, material]`",
+                ));
+            };
+            let find = |m: &str| {
+                mat_index(m).ok_or_else(|| {
+                    invalid(format!("{key}.between"), format!("no material named `{m}`"))
+                })
+            };
+            let (a, b) = (find(m1)?, find(m2)?);
+            joints.push(j.validate(&key)?);
+            let k = (joints.len() - 1) as u16;
+            joint_of[a * nm + b] = k;
+            joint_of[b * nm + a] = k;
+        }
+
+        if self.blocks.is_empty() {
+            return Err(invalid("blocks", "a scene needs at least one block"));
+        }
+        let mut blocks = Vec::with_capacity(self.blocks.len());
+        let mut seen: BTreeMap<&str, usize> = BTreeMap::new();
+        for (i, b) in self.blocks.iter().enumerate() {
+            let key = format!("blocks[{i}]");
+            if b.id.trim().is_empty() {
+                return Err(invalid(format!("{key}.id"), "must not be empty"));
+            }
+            if let Some(first) = seen.insert(&b.id, i) {
+                return Err(invalid(
+                    format!("{key}.id"),
+                    format!("duplicate block id `{}` (also blocks[{first}])", b.id),
+                ));
+            }
+            let material = mat_index(&b.material).ok_or_else(|| {
+                invalid(
+                    format!("{key}.material"),
+                    format!(
+                        "no material named `{}` (defined: {})",
+                        b.material,
+                        if names.is_empty() {
+                            "none".to_string()
+                        } else {
+                            names
+                                .iter()
+                                .map(|s| s.as_str())
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        }
+                    ),
+                )
+            })?;
+            blocks.push(b.validate(&key, material)?);
+        }
+        if blocks.iter().all(|b| b.fixed) {
+            return Err(invalid(
+                "blocks",
+                "every block is fixed, so nothing can move: mark at least one block \
+                 `fixed = false` (the default)",
+            ));
+        }
+        check_start_overlaps(&blocks)?;
+        if params.mode == Mode::Static {
+            check_static_support(&blocks, params.d_tol)?;
+        }
+        let mut warnings = Vec::new();
+        if params.d_tol < 2.0 * params.d_max {
+            warnings.push(invalid(
+                "analysis.contact_tolerance",
+                format!(
+                    "{} m is below twice the max displacement ({} m): contacts may be \
+                     missed within a step (paper section 2.6)",
+                    params.d_tol,
+                    2.0 * params.d_max
+                ),
+            ));
+        }
+        Ok(Model {
+            name: self.name.clone(),
+            params,
+            materials,
+            joints,
+            joint_of,
+            blocks,
+            warnings,
+        })
+    }
+}
+
+/// Rejects blocks that overlap at the start (beyond rounding: blocks cut from one rock
+/// share faces exactly); two fixed blocks may overlap, as they never interact.
+fn check_start_overlaps(blocks: &[ModelBlock]) -> Result<(), Invalid> {
+    let boxes: Vec<_> = blocks.iter().map(|b| b.polygon.aabb()).collect();
+    let mut pairs = Vec::new();
+    dda_contact::neighbour_pairs(&boxes, 0.0, &mut pairs);
+    for q in &pairs {
+        let (a, b) = (&blocks[q.a as usize], &blocks[q.b as usize]);
+        if a.fixed && b.fixed {
+            continue;
+        }
+        let (gap, _) = separation(&a.polygon, &b.polygon);
+        let size = a.polygon.diameter().max(b.polygon.diameter());
+        if gap < -1e-9 * size {
+            return Err(invalid(
+                format!("blocks[{}].vertices", q.b),
+                format!(
+                    "block `{}` overlaps block `{}` by {:.3e} m at the start",
+                    b.id, a.id, -gap
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// In a static analysis every free block must rest, through blocks within d_tol of each
+/// other, on a fixed block or a fixed point: a free-floating block has no equilibrium
+/// (the classic static DDA matrix is singular for it).
+fn check_static_support(blocks: &[ModelBlock], d_tol: f64) -> Result<(), Invalid> {
+    let boxes: Vec<_> = blocks.iter().map(|b| b.polygon.aabb()).collect();
+    let mut pairs = Vec::new();
+    dda_contact::neighbour_pairs(&boxes, d_tol, &mut pairs);
+    let mut supported: Vec<bool> = blocks
+        .iter()
+        .map(|b| b.fixed || !b.fixed_points.is_empty())
+        .collect();
+    // Blocks within d_tol of each other, as adjacency lists.
+    let mut adjacent: Vec<Vec<usize>> = vec![Vec::new(); blocks.len()];
+    for q in &pairs {
+        let (a, b) = (q.a as usize, q.b as usize);
+        if separation(&blocks[a].polygon, &blocks[b].polygon).0 <= d_tol {
+            adjacent[a].push(b);
+            adjacent[b].push(a);
+        }
+    }
+    // Breadth-first from every supported block.
+    let mut queue: std::collections::VecDeque<usize> =
+        (0..blocks.len()).filter(|&i| supported[i]).collect();
+    while let Some(i) = queue.pop_front() {
+        for &j in &adjacent[i] {
+            if !supported[j] {
+                supported[j] = true;
+                queue.push_back(j);
+            }
+        }
+    }
+    match supported.iter().position(|s| !s) {
+        Some(i) => Err(invalid(
+            format!("blocks[{i}]"),
+            format!(
+                "static analysis: block `{}` rests on no fixed block or fixed point \
+                 (directly or through touching blocks), so it has no equilibrium; fix it, \
+                 give it fixed points, or use mode = \"dynamic\"",
+                blocks[i].id
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// `v` if it lies in `range` (see [`crate::limits`]), else the error naming `key`.
+fn within(key: &str, v: f64, range: &Range) -> Result<f64, Invalid> {
+    if range.contains(v) {
+        Ok(v)
+    } else {
+        Err(invalid(key, range.message(v)))
+    }
+}
+
+/// Checks every component of `v` against `range`, naming `key[i]` in the error.
+fn each_within(key: &str, v: &[f64], range: &Range) -> Result<(), Invalid> {
+    for (i, &x) in v.iter().enumerate() {
+        within(&format!("{key}[{i}]"), x, range)?;
+    }
+    Ok(())
+}
+
+/// The validated analysis settings, in SI units and radians.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Params {
+    /// Dynamic or static.
+    pub mode: Mode,
+    /// Simulated time, s.
+    pub duration: f64,
+    /// Initial and largest time step, s.
+    pub dt0: f64,
+    /// d_max, m.
+    pub d_max: f64,
+    /// theta_max, rad.
+    pub theta_max: f64,
+    /// d_tol, m.
+    pub d_tol: f64,
+    /// Normal penalty, N/m.
+    pub normal_penalty: f64,
+    /// Shear penalty, N/m.
+    pub shear_penalty: f64,
+    /// Fixed-point penalty, N/m.
+    pub fixed_penalty: f64,
+    /// Detector name.
+    pub detector: String,
+    /// Gravity, if the scene asks for it.
+    pub gravity: Option<DVec2>,
+    /// 6 DOF per block (true) or 3.
+    pub deformable: bool,
+    /// Plane stress or strain.
+    pub plane: Plane,
+    /// OCI iteration bound.
+    pub max_oci: u32,
+    /// SVG frames over the run.
+    pub frames: u32,
+}
+
+impl Analysis {
+    fn validate(&self) -> Result<Params, Invalid> {
+        let k = |s: &str| format!("analysis.{s}");
+        let duration = within(&k("duration"), self.duration, &limits::DURATION)?;
+        let dt0 = within(&k("time_step"), self.time_step, &limits::TIME_STEP)?;
+        if duration / dt0 > limits::MAX_NOMINAL_STEPS {
+            return Err(invalid(
+                k("duration"),
+                format!(
+                    "{duration:e} s is more than {:e} steps of the time step {dt0:e} s; \
+                     shorten the run or lengthen analysis.time_step",
+                    limits::MAX_NOMINAL_STEPS
+                ),
+            ));
+        }
+        let d_max = within(
+            &k("max_displacement"),
+            self.max_displacement,
+            &limits::TOLERANCE,
+        )?;
+        let theta_deg = within(
+            &k("max_rotation_deg"),
+            self.max_rotation_deg,
+            &limits::ROTATION_DEG,
+        )?;
+        let d_tol = match self.contact_tolerance {
+            Some(v) => within(&k("contact_tolerance"), v, &limits::TOLERANCE)?,
+            None => 2.0 * d_max,
+        };
+        let normal_penalty = within(&k("normal_penalty"), self.normal_penalty, &limits::PENALTY)?;
+        let shear_penalty = match self.shear_penalty {
+            Some(v) => within(&k("shear_penalty"), v, &limits::PENALTY)?,
+            None => normal_penalty,
+        };
+        let fixed_penalty = match self.fixed_penalty {
+            Some(v) => within(&k("fixed_penalty"), v, &limits::FIXED_PENALTY)?,
+            None => 100.0 * normal_penalty,
+        };
+        if dda_contact::detector_by_name(&self.detector).is_err() {
+            return Err(invalid(
+                k("detector"),
+                format!(
+                    "unknown detector `{}` (expected one of: {})",
+                    self.detector,
+                    dda_contact::DETECTOR_NAMES.join(", ")
+                ),
+            ));
+        }
+        if let Some(g) = &self.gravity {
+            each_within(&k("gravity"), g, &limits::GRAVITY)?;
+        }
+        if self.max_oci == 0 || self.max_oci > 100 {
+            return Err(invalid(
+                k("max_oci"),
+                format!("must be between 1 and 100, got {}", self.max_oci),
+            ));
+        }
+        if self.frames > 100_000 {
+            return Err(invalid(k("frames"), "must be at most 100000"));
+        }
+        Ok(Params {
+            mode: self.mode,
+            duration,
+            dt0,
+            d_max,
+            theta_max: theta_deg.to_radians(),
+            d_tol,
+            normal_penalty,
+            shear_penalty,
+            fixed_penalty,
+            detector: self.detector.clone(),
+            gravity: self.gravity.map(DVec2::from),
+            deformable: self.deformable,
+            plane: self.plane,
+            max_oci: self.max_oci,
+            frames: self.frames,
+        })
+    }
+}
+
+/// Validated material constants; the elastic ones already converted for plane strain.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MaterialProps {
+    /// Density, kg/m^3.
+    pub density: f64,
+    /// Effective Young's modulus (E, or E/(1-nu^2) in plane strain), Pa.
+    pub young: f64,
+    /// Effective Poisson's ratio (nu, or nu/(1-nu) in plane strain).
+    pub poisson: f64,
+}
+
+impl Material {
+    fn validate(&self, key: &str, params: &Params) -> Result<MaterialProps, Invalid> {
+        let density = within(&format!("{key}.density"), self.density, &limits::DENSITY)?;
+        if !params.deformable {
+            return Ok(MaterialProps {
+                density,
+                young: 0.0,
+                poisson: 0.0,
+            });
+        }
+        let young = match self.young {
+            Some(e) => within(&format!("{key}.young"), e, &limits::YOUNG)?,
+            None => {
+                return Err(invalid(
+                    format!("{key}.young"),
+                    "deformable blocks need Young's modulus (or set analysis.deformable = false)",
+                ));
+            }
+        };
+        let nu = match self.poisson {
+            Some(nu) if nu.is_finite() && nu > -1.0 && nu < 0.5 => nu,
+            Some(nu) => {
+                return Err(invalid(
+                    format!("{key}.poisson"),
+                    format!("must be in (-1, 0.5), got {nu}"),
+                ));
+            }
+            None => {
+                return Err(invalid(
+                    format!("{key}.poisson"),
+                    "deformable blocks need Poisson's ratio (or set analysis.deformable = false)",
+                ));
+            }
+        };
+        let (young, poisson) = match params.plane {
+            Plane::Stress => (young, nu),
+            Plane::Strain => (young / (1.0 - nu * nu), nu / (1.0 - nu)),
+        };
+        Ok(MaterialProps {
+            density,
+            young,
+            poisson,
+        })
+    }
+}
+
+/// Validated contact properties.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct JointProps {
+    /// tan(friction angle).
+    pub tan_phi: f64,
+    /// Cohesion, Pa.
+    pub cohesion: f64,
+    /// Tensile strength, Pa.
+    pub tensile_strength: f64,
+}
+
+impl JointProps {
+    /// Whether contacts of this joint need shear springs (friction or cohesion).
+    pub fn has_shear(&self) -> bool {
+        self.tan_phi > 0.0 || self.cohesion > 0.0
+    }
+
+    /// Whether contacts of this joint start bonded (cohesion or tensile strength).
+    pub fn bonds(&self) -> bool {
+        self.cohesion > 0.0 || self.tensile_strength > 0.0
+    }
+}
+
+impl Joint {
+    fn validate(&self, key: &str) -> Result<JointProps, Invalid> {
+        let phi = self.friction_deg;
+        if !(phi.is_finite() && (0.0..90.0).contains(&phi)) {
+            return Err(invalid(
+                format!("{key}.friction_deg"),
+                format!("must be in [0, 90) degrees, got {phi}"),
+            ));
+        }
+        Ok(JointProps {
+            tan_phi: phi.to_radians().tan(),
+            cohesion: within(&format!("{key}.cohesion"), self.cohesion, &limits::STRENGTH)?,
+            tensile_strength: within(
+                &format!("{key}.tensile_strength"),
+                self.tensile_strength,
+                &limits::STRENGTH,
+            )?,
+        })
+    }
+}
+
+/// A validated block.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModelBlock {
+    /// Block id.
+    pub id: String,
+    /// Index into [`Model::materials`].
+    pub material: usize,
+    /// Its polygon (counter-clockwise, convex).
+    pub polygon: ConvexPolygon,
+    /// DOFs eliminated.
+    pub fixed: bool,
+    /// Initial velocity (u0, v0, r0, ex, ey, gxy) rates.
+    pub velocity: [f64; 6],
+    /// Initial stress (sx, sy, txy), Pa.
+    pub stress: [f64; 3],
+    /// Point loads: point, force.
+    pub loads: Vec<(DVec2, DVec2)>,
+    /// Fixed points.
+    pub fixed_points: Vec<DVec2>,
+}
+
+impl BlockSpec {
+    fn validate(&self, key: &str, material: usize) -> Result<ModelBlock, Invalid> {
+        for (i, v) in self.vertices.iter().enumerate() {
+            each_within(&format!("{key}.vertices[{i}]"), v, &limits::COORDINATE)?;
+        }
+        // Strict: clockwise order and collinear vertices are reported, not repaired.
+        let coords: Vec<DVec2> = self.vertices.iter().map(|&c| DVec2::from(c)).collect();
+        let polygon = ConvexPolygon::with_options(coords, &PolygonOptions::strict())
+            .map(|(p, _)| p)
+            .map_err(|e| {
+                let at = match e {
+                    PolygonError::DuplicateVertex { vertex, .. }
+                    | PolygonError::CollinearVertex { vertex }
+                    | PolygonError::NotConvex { vertex } => format!("{key}.vertices[{vertex}]"),
+                    _ => format!("{key}.vertices"),
+                };
+                invalid(at, format!("block `{}`: {e}", self.id))
+            })?;
+        let mut velocity = [0.0; 6];
+        if let Some(v) = &self.velocity {
+            each_within(&format!("{key}.velocity"), v, &limits::SPEED)?;
+            velocity[0] = v[0];
+            velocity[1] = v[1];
+        }
+        if let Some(w) = self.angular_velocity {
+            within(&format!("{key}.angular_velocity"), w, &limits::SPIN)?;
+            velocity[2] = w;
+        }
+        let mut stress = [0.0; 3];
+        if let Some(s) = &self.stress {
+            each_within(&format!("{key}.stress"), s, &limits::STRESS)?;
+            stress = *s;
+        }
+        let mut loads = Vec::new();
+        for (i, l) in self.loads.iter().enumerate() {
+            each_within(&format!("{key}.loads[{i}].at"), &l.at, &limits::COORDINATE)?;
+            each_within(&format!("{key}.loads[{i}].force"), &l.force, &limits::FORCE)?;
+            loads.push((DVec2::from(l.at), DVec2::from(l.force)));
+        }
+        let mut fixed_points = Vec::new();
+        for (i, p) in self.fixed_points.iter().enumerate() {
+            each_within(&format!("{key}.fixed_points[{i}]"), p, &limits::COORDINATE)?;
+            fixed_points.push(DVec2::from(*p));
+        }
+        Ok(ModelBlock {
+            id: self.id.clone(),
+            material,
+            polygon,
+            fixed: self.fixed,
+            velocity,
+            stress,
+            loads,
+            fixed_points,
+        })
+    }
+}
+
+/// A validated scene, ready to run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Model {
+    /// Scene name.
+    pub name: String,
+    /// Analysis settings.
+    pub params: Params,
+    /// Materials, in name order.
+    pub materials: Vec<MaterialProps>,
+    /// Joints; index 0 is the default.
+    pub joints: Vec<JointProps>,
+    /// Joint index for each ordered pair of materials (row-major, materials^2).
+    pub joint_of: Vec<u16>,
+    /// Blocks in scene order.
+    pub blocks: Vec<ModelBlock>,
+    /// What is allowed but suspect (key and message), for the user to see.
+    pub warnings: Vec<Invalid>,
+}
+
+impl Model {
+    /// The joint acting between blocks `a` and `b`.
+    pub fn joint_between(&self, a: usize, b: usize) -> &JointProps {
+        self.joint_of_materials(self.blocks[a].material, self.blocks[b].material)
+    }
+
+    /// The joint acting between blocks of materials `ma` and `mb`.
+    pub fn joint_of_materials(&self, ma: usize, mb: usize) -> &JointProps {
+        &self.joints[self.joint_of[ma * self.materials.len() + mb] as usize]
+    }
+}

@@ -1,0 +1,259 @@
+//! The open-close iteration (OCI): solve for the current contact states, re-check
+//! every contact (`contact_law`), let trajectory tracking activate covers, and repeat
+//! until nothing changes. Before it, the state predictor solves the step with the
+//! previous step's factor. Iterations after the first solve through a low-rank update
+//! of the factor while few springs changed.
+
+use crate::assembly::Spring;
+use crate::diagnosis::SimError;
+use crate::simulation::Simulation;
+use crate::solver::RankOne;
+use crate::springs::{Row, normal_row};
+use crate::state::StepRecord;
+use dda_contact::ContactState;
+use dda_geom::Motion;
+use std::time::Instant;
+
+/// Most springs that may differ from the factorised matrix before an OCI iteration
+/// assembles and factorises anew rather than solving through a low-rank update. Measured
+/// on paper 5.2b (4,956 unknowns, one run each) with the half-sweep low-rank solve
+/// (`BlockSystem::solve_low_rank`): solve seconds per OCI iteration 1.43 ms at 24, 1.34
+/// at 48, 1.12 at 64, 1.11 at 80, 1.03 at 96, 1.11 at 128 and 1.14 at 200 (a
+/// factorisation costs about 2.7 ms; beyond about 100 terms the capacitance matrix and
+/// the Gram products of the new columns cost as much). With full solves per column it
+/// had been 1.85 ms at 24 and 2.02 at 64. Measured again after the dt growth rule: a
+/// low-rank solve of rank 100-149 costs 1.25 ms and one of 150-199 2.41 ms; at a bound
+/// of 200 the run saved 302 factorisations and lost more in low-rank solves
+/// (`docs/performance.md`).
+pub(crate) const MAX_RANK: usize = 96;
+
+impl Simulation {
+    /// Predicts the contact states of a step before its first OCI iteration: the step's
+    /// right-hand side, with the states inherited from the previous step, solved with the
+    /// previous step's factor (same pattern; geometry and dt one step apart), and every
+    /// active contact re-checked against that approximate motion. About a tenth of a
+    /// collapsing column's contacts change state at each step; found here for the price
+    /// of one solve, they no longer cost a factorisation in the OCI, which still decides
+    /// every state and convergence with exact solves. Skipped when the pattern changed.
+    /// (Our choice: the paper starts the OCI from the previous step's states.)
+    pub(crate) fn predict_states(&mut self, rec: &mut StepRecord) {
+        if !self.system.is_factored() {
+            return;
+        }
+        let t0 = Instant::now();
+        self.collect_springs();
+        self.system.clear_rhs();
+        self.assemble_rhs();
+        let t1 = Instant::now();
+        rec.assembly_s += (t1 - t0).as_secs_f64();
+        let solved = self.system.resolve();
+        rec.solve_s += t1.elapsed().as_secs_f64();
+        if solved {
+            let t2 = Instant::now();
+            self.gather_solution();
+            self.update_states();
+            rec.assembly_s += t2.elapsed().as_secs_f64();
+        }
+    }
+
+    /// Open-close iteration at step size `dt` (base terms already built). Returns whether
+    /// it converged and how many iterations it took.
+    pub(crate) fn open_close_iteration(
+        &mut self,
+        rec: &mut StepRecord,
+    ) -> Result<(bool, u32), SimError> {
+        let max_oci = self.model.params.max_oci;
+        for it in 1..=max_oci {
+            self.solve_states(rec)?;
+            let t2 = Instant::now();
+            self.gather_solution();
+            if let Some(i) = (0..self.d.len()).find(|&i| self.d[i].iter().any(|x| !x.is_finite())) {
+                return Err(SimError::NonFinite {
+                    t: self.t,
+                    block: self.model.blocks[i].id.clone(),
+                });
+            }
+            let mut changed = self.update_states();
+            rec.assembly_s += t2.elapsed().as_secs_f64();
+            let t3 = Instant::now();
+            let activated = self.track_list.track(
+                self.detector.as_ref(),
+                &self.shapes,
+                &self.motions,
+                &mut self.contacts,
+            );
+            if activated > 0 {
+                self.set_up_new_active();
+            }
+            changed += activated;
+            rec.detection_s += t3.elapsed().as_secs_f64();
+            if changed == 0 {
+                return Ok((true, it));
+            }
+        }
+        Ok((false, max_oci))
+    }
+
+    /// Solves for the current contact states: through the factor already computed when
+    /// few springs changed since, otherwise by assembling and factorising anew.
+    pub(crate) fn solve_states(&mut self, rec: &mut StepRecord) -> Result<(), SimError> {
+        let t0 = Instant::now();
+        self.collect_springs();
+        let shear = self.springs.iter().filter(|s| s.shear).count() as u64;
+        self.totals.shear_springs += shear;
+        self.totals.normal_springs += self.springs.len() as u64 - shear;
+        self.totals.friction_forces += self.forces.len() as u64;
+        if self.factor_current && self.system.is_factored() && self.spring_changes().is_some() {
+            self.force_changes();
+            let t1 = Instant::now();
+            rec.assembly_s += (t1 - t0).as_secs_f64();
+            let solved = self.system.solve_low_rank(&self.changes, &self.rhs_changes);
+            rec.solve_s += t1.elapsed().as_secs_f64();
+            if solved {
+                return Ok(());
+            }
+        } else {
+            rec.assembly_s += t0.elapsed().as_secs_f64();
+        }
+        self.assemble_and_factorise(rec)
+    }
+
+    /// The difference between the springs in effect and those in the factorised matrix,
+    /// as rank-one terms (both lists are in contact order); None if it has more than
+    /// [`MAX_RANK`] terms.
+    pub(crate) fn spring_changes(&mut self) -> Option<()> {
+        self.changes.clear();
+        self.rhs_changes.clear();
+        let (now, then) = (&self.springs, &self.factored_springs);
+        let (mut i, mut j) = (0, 0);
+        let free = &self.free;
+        let (rows, set, shapes, half) = (&self.rows, &self.contacts, &self.shapes, &self.half);
+        let (changes, rhs_changes) = (&mut self.changes, &mut self.rhs_changes);
+        // A spring added (sign 1) or removed (-1): its stiffness p c c^T and its
+        // right-hand side -p g0 c.
+        let mut change = |s: &Spring, sign: f64| {
+            let row = s.row(rows, set, shapes, half);
+            let blocks = [free[row.blocks[0] as usize], free[row.blocks[1] as usize]];
+            let p = sign * s.penalty;
+            changes.push(RankOne {
+                blocks,
+                c: row.c,
+                s: p,
+            });
+            rhs_changes.push(RankOne {
+                blocks,
+                c: row.c,
+                s: -p * row.g0,
+            });
+            changes.len() <= MAX_RANK
+        };
+        while i < now.len() || j < then.len() {
+            let key = |s: &Spring| (s.contact, s.shear);
+            let within = match (now.get(i), then.get(j)) {
+                (Some(a), Some(b)) if key(a) == key(b) => {
+                    i += 1;
+                    j += 1;
+                    // Equal springs of one attempt have equal rows.
+                    a == b || {
+                        change(a, 1.0);
+                        change(b, -1.0)
+                    }
+                }
+                (Some(a), Some(b)) if key(a) < key(b) => {
+                    i += 1;
+                    change(a, 1.0)
+                }
+                (Some(a), None) => {
+                    i += 1;
+                    change(a, 1.0)
+                }
+                (_, Some(b)) => {
+                    j += 1;
+                    change(b, -1.0)
+                }
+                (None, None) => break,
+            };
+            if !within {
+                return None;
+            }
+        }
+        Some(())
+    }
+
+    /// Adds the changes of the friction forces since the factorisation to the
+    /// right-hand side changes (both lists are in contact order).
+    pub(crate) fn force_changes(&mut self) {
+        let (now, then) = (&self.forces, &self.factored_forces);
+        let free = &self.free;
+        let mut change = |f: f64, row: &Row| {
+            self.rhs_changes.push(RankOne {
+                blocks: [free[row.blocks[0] as usize], free[row.blocks[1] as usize]],
+                c: row.c,
+                s: f,
+            });
+        };
+        let (mut i, mut j) = (0, 0);
+        while i < now.len() || j < then.len() {
+            match (now.get(i), then.get(j)) {
+                (Some(a), Some(b)) if a.0 == b.0 => {
+                    if a.2 == b.2 {
+                        if a.1 != b.1 {
+                            change(a.1 - b.1, &a.2);
+                        }
+                    } else {
+                        change(a.1, &a.2);
+                        change(-b.1, &b.2);
+                    }
+                    i += 1;
+                    j += 1;
+                }
+                (Some(a), Some(b)) if a.0 < b.0 => {
+                    change(a.1, &a.2);
+                    i += 1;
+                }
+                (Some(a), None) => {
+                    change(a.1, &a.2);
+                    i += 1;
+                }
+                (_, Some(b)) => {
+                    change(-b.1, &b.2);
+                    j += 1;
+                }
+                (None, None) => break,
+            }
+        }
+    }
+
+    /// Copies the solution into per-block motions (zero for fixed blocks).
+    pub(crate) fn gather_solution(&mut self) {
+        let nd = self.nd;
+        self.motions.clear();
+        for (i, f) in self.free.iter().enumerate() {
+            self.d[i] = [0.0; 6];
+            if let Some(f) = f {
+                self.d[i][..nd].copy_from_slice(self.system.solution(*f));
+            }
+            self.motions
+                .push(Motion::new(self.shapes[i].centroid, &self.d[i]));
+        }
+    }
+
+    /// Sets up the contacts made active since [`Simulation::linearise`] (by trajectory
+    /// tracking, or a spring moved to the deepest face; the ones whose row is still
+    /// [`NO_ROW`]): their rows are linearised as `linearise` would have, and those
+    /// tracking brought back locked slide instead where the joint has no shear (every
+    /// other closed contact of such a joint slides already: the step-start normalisation
+    /// and `update_states` see to it).
+    pub(crate) fn set_up_new_active(&mut self) {
+        for k in 0..self.contacts.contacts.len() {
+            let c = self.contacts.contacts[k];
+            if !(c.active && self.rows[k].g0.is_nan()) {
+                continue;
+            }
+            self.rows[k] = normal_row(&c, &self.shapes, &self.half);
+            if c.state == ContactState::Locked && !self.joint(k).has_shear() {
+                self.contacts.contacts[k].state = ContactState::Sliding;
+            }
+        }
+    }
+}

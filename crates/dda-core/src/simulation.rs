@@ -1,0 +1,457 @@
+//! A running simulation, and the one place that states the sequence of a step:
+//!
+//! ```text
+//! detection at step start -> pattern -> linearisation and block terms -> state
+//! prediction -> open-close iteration (assemble, solve, contact law, tracking) ->
+//! time-step control -> physics guard -> update
+//! ```
+//!
+//! Each stage lives in a file of its own: `detection`, `pattern`, `assembly`,
+//! `open_close` (with the state predictor and the low-rank path), `contact_law`,
+//! `time_step`, `guard`, `update`; `state` holds what a checkpoint saves and
+//! `diagnosis` why a run stops. `docs/method.md` states the formulation.
+
+use crate::assembly::Spring;
+use crate::detection::NEIGHBOUR_SKIN;
+use crate::diagnosis::{Diagnosis, SimError};
+use crate::effects::Effects;
+use crate::guard::{self, EnergyBalance, Violation};
+use crate::kinematics::{Mat6, Vec6, mass_matrix};
+use crate::scene::Model;
+use crate::solver::{BlockSystem, Entry, RankOne};
+use crate::springs::{HalfStep, Row};
+use crate::state::{BlockState, StepRecord, Totals};
+use crate::time_step::{DT_FLOOR, motion_room, step_growth};
+use dda_contact::{
+    BlockShape, ContactDetector, ContactSet, DetectionParams, NeighbourPair, NeighbourSearch,
+    TrackList, detector_by_name,
+};
+use dda_geom::{Aabb, Motion};
+use std::time::Instant;
+
+/// A running simulation of a validated scene.
+pub struct Simulation {
+    pub(crate) model: Model,
+    pub(crate) effects: Effects,
+    pub(crate) detector: Box<dyn ContactDetector>,
+    pub(crate) detection: DetectionParams,
+    pub(crate) options: RunOptions,
+    pub(crate) nd: usize,
+    pub(crate) blocks: Vec<BlockState>,
+    pub(crate) shapes: Vec<BlockShape>,
+    /// Free-block index of each block (None: fixed).
+    pub(crate) free: Vec<Option<u32>>,
+    /// Material of each block, packed: the joint lookups of every contact in every OCI
+    /// iteration read it (the model's blocks are large records, mostly cache misses).
+    pub(crate) material: Vec<u32>,
+    /// Block index of each free block: the inverse of `free`.
+    pub(crate) free_blocks: Vec<u32>,
+    pub(crate) n_free: usize,
+    pub(crate) t: f64,
+    pub(crate) dt: f64,
+    pub(crate) totals: Totals,
+    pub(crate) contacts: ContactSet,
+    // Work buffers, reused from step to step.
+    pub(crate) system: BlockSystem,
+    pub(crate) prev: ContactSet,
+    /// The candidates trajectory tracking may activate in this step.
+    pub(crate) track_list: TrackList,
+    pub(crate) neighbours: NeighbourSearch,
+    pub(crate) pairs: Vec<NeighbourPair>,
+    /// The contacts at step start, restored when an attempt is cut.
+    pub(crate) saved: Vec<dda_contact::Contact>,
+    /// Neighbour pairs within the pattern margin (only when a new pattern is made).
+    pub(crate) pattern_pairs: Vec<NeighbourPair>,
+    pub(crate) aabbs: Vec<Aabb>,
+    pub(crate) block_pairs: Vec<(u32, u32)>,
+    /// The system's pattern: the needed pairs when it was last set, widened.
+    pub(crate) pattern: Vec<(u32, u32)>,
+    pub(crate) pair_entry: Vec<Option<Entry>>,
+    /// Each block's half step, where the attempt's contact rows are linearised.
+    pub(crate) half: Vec<HalfStep>,
+    /// Each active contact's normal row for the attempt (an inactive one's is a NaN
+    /// placeholder until it becomes active: only active contacts' rows are read).
+    pub(crate) rows: Vec<Row>,
+    pub(crate) springs: Vec<Spring>,
+    /// Friction forces in effect: contact, magnitude, row.
+    pub(crate) forces: Vec<(u32, f64, Row)>,
+    pub(crate) factored_springs: Vec<Spring>,
+    pub(crate) factored_forces: Vec<(u32, f64, Row)>,
+    pub(crate) changes: Vec<RankOne>,
+    pub(crate) rhs_changes: Vec<RankOne>,
+    /// Whether the system's factor is of this attempt's matrix (with `factored_springs`).
+    pub(crate) factor_current: bool,
+    pub(crate) base_k: Vec<Mat6>,
+    pub(crate) base_f: Vec<Vec6>,
+    pub(crate) mass: Vec<Mat6>,
+    pub(crate) d: Vec<Vec6>,
+    /// The trial motion of each block as a map of its points.
+    pub(crate) motions: Vec<Motion>,
+    /// Contacts whose state changed in the last OCI iteration (for a diagnosis).
+    pub(crate) flipped: Vec<u32>,
+    /// Why the run stopped, once it has.
+    pub(crate) diagnosis: Option<Diagnosis>,
+    /// The physics guard's energy balance (saved).
+    pub(crate) energy: EnergyBalance,
+    /// Energy below the model's resolution, added to the guard's reference (see
+    /// `guard`): every free block lowered by d_tol, and a spring over the start overlap.
+    pub(crate) energy_floor: f64,
+    /// Violations recorded so far (saved).
+    pub(crate) violations: Vec<Violation>,
+    /// Each free block's gain of kinetic energy in the step (scratch of the guard).
+    pub(crate) gains: Vec<(f64, usize)>,
+}
+
+impl std::fmt::Debug for Simulation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Simulation")
+            .field("scene", &self.model.name)
+            .field("t", &self.t)
+            .field("dt", &self.dt)
+            .field("blocks", &self.blocks.len())
+            .finish()
+    }
+}
+
+/// Options of a run that are not part of the scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RunOptions {
+    /// Detect contacts on the thread pool (results are identical either way).
+    pub parallel: bool,
+    /// Stop with [`SimError::BrokenPhysics`] at the first step that breaks physics
+    /// (penetration beyond d_tol, energy created beyond [`crate::ENERGY_TOLERANCE`]), keeping
+    /// the state before it. Off, the step is taken and the violation recorded
+    /// ([`Simulation::violations`]). The `dda` command turns it on unless
+    /// `--keep-going`; off by default for library users who judge runs themselves (the
+    /// sweeps and the robustness study record what a detector does wrong).
+    pub stop_on_violation: bool,
+    /// Most bytes the factor of the global matrix may take (None: no bound but the
+    /// allocator's, whose failure is still an error, not an abort).
+    pub max_memory: Option<u64>,
+}
+
+impl Default for RunOptions {
+    /// Sequential. Measured on this project's 2-core machine, the thread pool did not pay
+    /// at any size tried: paper 5.2b (826 blocks), detection 0.72-0.80 s with threads
+    /// against 0.60-0.64 s without over the run, per-block terms in assembly 1.19-1.29 s
+    /// against 1.12-1.17 s; 10,131 blocks, detection 17.7 against 16.8 ms per step. Most
+    /// of the detection time is tracking in the open-close iteration and the neighbour
+    /// search, which are sequential, and the parallel parts are too short per step to
+    /// pay for waking the pool.
+    fn default() -> Self {
+        RunOptions {
+            parallel: false,
+            stop_on_violation: false,
+            max_memory: None,
+        }
+    }
+}
+
+impl Simulation {
+    /// Sets up a run of `model` at t = 0.
+    pub fn new(model: Model, options: RunOptions) -> Self {
+        let effects = Effects::of(&model);
+        let p = &model.params;
+        // Validation accepted the name, so this only falls back on a programming error.
+        let detector =
+            detector_by_name(&p.detector).unwrap_or_else(|_| Box::new(dda_contact::CoverDetector));
+        let detection = DetectionParams::new(p.d_tol, p.theta_max);
+        let mut free = Vec::with_capacity(model.blocks.len());
+        let mut n_free = 0u32;
+        for b in &model.blocks {
+            if b.fixed {
+                free.push(None);
+            } else {
+                free.push(Some(n_free));
+                n_free += 1;
+            }
+        }
+        let blocks: Vec<BlockState> = model
+            .blocks
+            .iter()
+            .map(|b| BlockState {
+                polygon: b.polygon.clone(),
+                velocity: if b.fixed { [0.0; 6] } else { b.velocity },
+                stress: if effects.elasticity {
+                    b.stress
+                } else {
+                    [0.0; 3]
+                },
+                rotation: 0.0,
+                loads: b.loads.clone(),
+                fixed_points: b.fixed_points.iter().map(|&q| (q, q)).collect(),
+            })
+            .collect();
+        let shapes = blocks.iter().map(|b| BlockShape::new(&b.polygon)).collect();
+        let material = model.blocks.iter().map(|b| b.material as u32).collect();
+        let n = blocks.len();
+        let skin = NEIGHBOUR_SKIN * model.params.d_max;
+        let mut system = BlockSystem::new();
+        system.memory_limit = options.max_memory;
+        let mut energy_floor = 0.0;
+        let mut initial = 0.0;
+        for (i, b) in blocks.iter().enumerate() {
+            if model.blocks[i].fixed {
+                continue;
+            }
+            let mat = model.materials[model.blocks[i].material];
+            let m = b.polygon.moments();
+            let g = p.gravity.map_or(0.0, |g| g.length());
+            let overlap = 1e-9 * b.polygon.diameter();
+            energy_floor +=
+                mat.density * m.area * g * p.d_tol + 0.5 * p.normal_penalty * overlap * overlap;
+            initial += guard::kinetic(&mass_matrix(&m, mat.density), &b.velocity);
+            if effects.elasticity {
+                initial += guard::strain(m.area, &b.stress, mat.young, mat.poisson);
+            }
+        }
+        Simulation {
+            dt: p.dt0,
+            nd: effects.dofs_per_block(),
+            model,
+            effects,
+            detector,
+            detection,
+            options,
+            blocks,
+            shapes,
+            free_blocks: (0..free.len() as u32)
+                .filter(|&i| free[i as usize].is_some())
+                .collect(),
+            material,
+            free,
+            n_free: n_free as usize,
+            t: 0.0,
+            totals: Totals::default(),
+            contacts: ContactSet::default(),
+            system,
+            prev: ContactSet::default(),
+            track_list: TrackList::new(),
+            neighbours: NeighbourSearch::with_skin(skin),
+            pairs: Vec::new(),
+            saved: Vec::new(),
+            pattern_pairs: Vec::new(),
+            aabbs: Vec::with_capacity(n),
+            block_pairs: Vec::new(),
+            pattern: Vec::new(),
+            pair_entry: Vec::new(),
+            half: Vec::with_capacity(n),
+            rows: Vec::new(),
+            springs: Vec::new(),
+            forces: Vec::new(),
+            factored_springs: Vec::new(),
+            factored_forces: Vec::new(),
+            changes: Vec::new(),
+            rhs_changes: Vec::new(),
+            factor_current: false,
+            base_k: Vec::new(),
+            base_f: Vec::new(),
+            mass: Vec::new(),
+            d: vec![[0.0; 6]; n],
+            motions: Vec::with_capacity(n),
+            flipped: Vec::new(),
+            diagnosis: None,
+            energy: EnergyBalance {
+                supplied: initial,
+                supplied_max: initial,
+                worst_ratio: 0.0,
+            },
+            energy_floor,
+            violations: Vec::new(),
+            gains: Vec::new(),
+        }
+    }
+
+    /// Violations of physics recorded so far by a run that goes on through them
+    /// ([`crate::RunOptions::stop_on_violation`] off).
+    pub fn violations(&self) -> &[Violation] {
+        &self.violations
+    }
+
+    /// The physics guard's energy balance so far.
+    pub fn energy_balance(&self) -> &EnergyBalance {
+        &self.energy
+    }
+
+    /// The validated scene.
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    /// The effects this run assembles.
+    pub fn effects(&self) -> &Effects {
+        &self.effects
+    }
+
+    /// The detector's name.
+    pub fn detector_name(&self) -> &str {
+        self.detector.name()
+    }
+
+    /// Simulated time, s.
+    pub fn time(&self) -> f64 {
+        self.t
+    }
+
+    /// The current (controlled) step size, s.
+    pub fn time_step(&self) -> f64 {
+        self.dt
+    }
+
+    /// Whether the run has reached its duration.
+    pub fn finished(&self) -> bool {
+        self.t >= self.model.params.duration
+    }
+
+    /// The blocks' states.
+    pub fn blocks(&self) -> &[BlockState] {
+        &self.blocks
+    }
+
+    /// The contacts at the end of the last step.
+    pub fn contacts(&self) -> &ContactSet {
+        &self.contacts
+    }
+
+    /// Counters so far.
+    pub fn totals(&self) -> &Totals {
+        &self.totals
+    }
+
+    /// Unknowns of the global system.
+    pub fn unknowns(&self) -> usize {
+        self.n_free * self.nd
+    }
+
+    /// Number of symbolic factorisations, numeric factorisations and low-rank solves so
+    /// far.
+    pub fn factorisations(&self) -> (u64, u64, u64) {
+        (
+            self.system.symbolic_count,
+            self.system.numeric_count,
+            self.system.low_rank_count,
+        )
+    }
+
+    /// Why the run stopped, once a step has failed: the blocks and contacts involved.
+    pub fn diagnosis(&self) -> Option<&Diagnosis> {
+        self.diagnosis.as_ref()
+    }
+
+    /// Runs to the scene's duration, calling `on_step` after every step.
+    pub fn run(
+        &mut self,
+        mut on_step: impl FnMut(&Simulation, &StepRecord),
+    ) -> Result<(), SimError> {
+        while !self.finished() {
+            let rec = self.step()?;
+            on_step(self, &rec);
+        }
+        Ok(())
+    }
+
+    /// Advances one step (with as many retries as the time-step control needs). On an
+    /// error the state stays at the last completed step and [`Simulation::diagnosis`]
+    /// says what was involved.
+    pub fn step(&mut self) -> Result<StepRecord, SimError> {
+        let mut last_dt = self.dt;
+        let mut worst = None;
+        let result = self.try_step(&mut last_dt, &mut worst);
+        if let Err(e) = &result {
+            self.diagnose(e, last_dt, worst);
+        }
+        result
+    }
+
+    /// [`Simulation::step`], reporting the last attempted step size and the block that
+    /// moved most in the last attempt.
+    pub(crate) fn try_step(
+        &mut self,
+        last_dt: &mut f64,
+        worst: &mut Option<usize>,
+    ) -> Result<StepRecord, SimError> {
+        let started = Instant::now();
+        let mut rec = StepRecord::default();
+        let t_det = Instant::now();
+        self.detect_step_start();
+        rec.detection_s += t_det.elapsed().as_secs_f64();
+        rec.candidates = self.contacts.len();
+
+        let t_pat = Instant::now();
+        self.set_pattern()?;
+        rec.assembly_s += t_pat.elapsed().as_secs_f64();
+        self.saved.clone_from(&self.contacts.contacts);
+        let p = &self.model.params;
+        let (duration, d_max, theta_max, max_oci, dt0) =
+            (p.duration, p.d_max, p.theta_max, p.max_oci, p.dt0);
+        let remaining = duration - self.t;
+        // The step respects the motion it starts with: no block's current velocity may
+        // carry a vertex beyond d_max, or turn it beyond theta_max, within it.
+        let planned = self.dt.min(self.velocity_room());
+        // Land on `duration`; a remainder within 1e-6 of a step is taken with it rather
+        // than left as a sliver step.
+        let landing = planned * (1.0 + 1e-6) >= remaining;
+        let mut dt = if landing { remaining } else { planned };
+
+        let mut first_attempt = true;
+        loop {
+            *last_dt = dt;
+            let t_asm = Instant::now();
+            self.linearise(dt);
+            self.base_terms(dt);
+            rec.assembly_s += t_asm.elapsed().as_secs_f64();
+            if first_attempt {
+                self.predict_states(&mut rec);
+                first_attempt = false;
+            }
+            // The first OCI iteration of every attempt factorises its own matrix.
+            self.factor_current = false;
+            let (converged, iterations) = self.open_close_iteration(&mut rec)?;
+            self.totals.oci_iterations += iterations as u64;
+            let reason;
+            if converged {
+                let (disp, rot, moved_most) = self.largest_motion();
+                *worst = moved_most;
+                if disp <= d_max && rot <= theta_max {
+                    rec.oci = iterations;
+                    let growth = step_growth(iterations, max_oci, disp, rot, d_max, theta_max);
+                    self.accept(dt, &mut rec)?;
+                    if landing {
+                        self.t = duration;
+                    } else {
+                        self.dt = (dt * growth).min(dt0);
+                    }
+                    break;
+                }
+                let ratio = motion_room(disp, rot, d_max, theta_max);
+                dt *= (0.9 * ratio).clamp(0.1, 0.9);
+                reason = "step displacement above d_max or rotation above theta_max";
+            } else {
+                dt /= 3.0;
+                reason = "open-close iteration did not converge";
+            }
+            rec.cuts += 1;
+            self.totals.cuts += 1;
+            self.contacts.contacts.copy_from_slice(&self.saved);
+            if dt < DT_FLOOR * dt0 {
+                return Err(SimError::TimeStepCollapsed {
+                    t: self.t,
+                    dt,
+                    reason: reason.to_string(),
+                });
+            }
+        }
+        self.totals.steps += 1;
+        rec.step = self.totals.steps;
+        rec.t = self.t;
+        rec.active_contacts = self.contacts.active().count();
+        rec.closed_contacts = self.contacts.closed_count();
+        rec.kinetic_energy = self.kinetic_energy();
+        self.totals.max_penetration = self.totals.max_penetration.max(rec.max_penetration);
+        self.totals.detection_s += rec.detection_s;
+        self.totals.assembly_s += rec.assembly_s;
+        self.totals.solve_s += rec.solve_s;
+        self.totals.total_s += started.elapsed().as_secs_f64();
+        Ok(rec)
+    }
+}

@@ -1,0 +1,157 @@
+//! Time-step control: dt limited by the velocities a step starts with, cut when the
+//! open-close iteration does not converge or the motion passes d_max or theta_max, grown
+//! after easy steps. The factors are our choice (`docs/method.md`, section 7).
+
+use crate::kinematics::point_displacement;
+use crate::simulation::Simulation;
+
+/// Most OCI iterations of an easy step (after which dt may grow): two thirds of the bound
+/// `max_oci`, rounded up (4 of 6). Our choice; Shi's formulation and the paper fix only the
+/// criteria. In a large column a few of its many contacts change state in almost every
+/// iteration, so a bound of half (3 of 6) held dt back as N grew. Measured with 4 against
+/// 3 (counts, `docs/performance.md`): 111,460 blocks (0.1 s) 954 OCI iterations and 601
+/// factorisations against 1,287 and 844; 3,472 blocks 574 and 293 against 641 and 334;
+/// 10,131 blocks 691 and 380 against 725 and 361; the 826-block column over five
+/// trajectories (`cargo xtask target`) 17,712 and 5,927 against 17,902 and 5,785. 5 of 6
+/// gave 20 step cuts at 3,472 blocks and no gain.
+pub fn easy_oci(max_oci: u32) -> u32 {
+    (2 * max_oci).div_ceil(3)
+}
+
+/// Largest factor by which dt grows after one step.
+pub(crate) const MAX_GROWTH: f64 = 1.25;
+
+/// Fraction of d_max and theta_max that the next step's motion, scaled in proportion to
+/// dt, may reach when dt grows after an easy step. Our choice. Until this rule dt grew by
+/// 1.25 only after a step that moved at most half of d_max (0.625 of d_max predicted),
+/// and a collapsing column, whose steps are limited by d_max, stayed at one dt for
+/// hundreds of steps. Measured over the five trajectories of `cargo xtask target`
+/// (826 blocks): steps, OCI iterations and factorisations 4,775, 18,308 and 6,173 under
+/// the old rule; with this rule at 0.625, 0.7, 0.8 and 0.9 of d_max: 4,357, 17,456 and
+/// 5,828; 4,198, 17,116 and 5,811; 4,032, 16,910 and 5,886; 3,889, 16,697 and 6,039
+/// (more cuts, 166 against 91). The 3,472- and 10,131-block columns (0.1 s) are OCI
+/// limited and took the same steps either way.
+pub(crate) const GROWTH_TARGET: f64 = 0.8;
+
+/// Factor by which dt grows after an accepted step that took `iterations` OCI iterations
+/// (of at most `max_oci`) and whose largest vertex displacement and rotation were `disp`
+/// and `rot`: 1 unless the step was easy ([`easy_oci`]); otherwise as far as that motion,
+/// scaled in proportion to dt, stays within `GROWTH_TARGET` of `d_max` and `theta_max`,
+/// between 1 and `MAX_GROWTH`.
+pub fn step_growth(
+    iterations: u32,
+    max_oci: u32,
+    disp: f64,
+    rot: f64,
+    d_max: f64,
+    theta_max: f64,
+) -> f64 {
+    if iterations > easy_oci(max_oci) {
+        return 1.0;
+    }
+    (GROWTH_TARGET * motion_room(disp, rot, d_max, theta_max)).clamp(1.0, MAX_GROWTH)
+}
+
+/// How many times a step's largest displacement `disp` and rotation `rot` fit within
+/// `d_max` and `theta_max` (the smaller ratio): below 1 the step moved too far, and dt
+/// scales by it either way, down after a cut and up in [`step_growth`].
+pub(crate) fn motion_room(disp: f64, rot: f64, d_max: f64, theta_max: f64) -> f64 {
+    (d_max / disp.max(f64::MIN_POSITIVE)).min(theta_max / rot.max(f64::MIN_POSITIVE))
+}
+
+/// Floor of the time step, relative to the initial step: below it the run stops.
+pub(crate) const DT_FLOOR: f64 = 1e-9;
+
+impl Simulation {
+    /// The largest step the blocks' current velocities allow: the smaller of d_max over
+    /// the fastest vertex speed (strain rates included) and theta_max over the fastest
+    /// spin, infinite when nothing moves.
+    pub(crate) fn velocity_room(&self) -> f64 {
+        let p = &self.model.params;
+        let (mut speed, mut spin) = (0.0f64, 0.0f64);
+        for (i, s) in self.shapes.iter().enumerate() {
+            if self.free[i].is_none() {
+                continue;
+            }
+            let v = &self.blocks[i].velocity;
+            spin = spin.max(v[2].abs());
+            for &x in &s.vertices {
+                speed = speed.max(point_displacement(x, s.centroid, v).length());
+            }
+        }
+        (p.d_max / speed).min(p.theta_max / spin)
+    }
+
+    /// Largest vertex displacement (first order) and largest |rotation| of the trial
+    /// solution.
+    pub(crate) fn largest_motion(&self) -> (f64, f64, Option<usize>) {
+        let (mut disp, mut rot) = (0.0f64, 0.0f64);
+        let (mut worst, mut worst_ratio) = (None, 0.0);
+        let p = &self.model.params;
+        for (i, s) in self.shapes.iter().enumerate() {
+            if self.free[i].is_none() {
+                continue;
+            }
+            let d = &self.d[i];
+            rot = rot.max(d[2].abs());
+            let mut block_disp = 0.0f64;
+            for &v in &s.vertices {
+                block_disp = block_disp.max(point_displacement(v, s.centroid, d).length());
+            }
+            disp = disp.max(block_disp);
+            let ratio = (block_disp / p.d_max).max(d[2].abs() / p.theta_max);
+            if ratio > worst_ratio {
+                (worst, worst_ratio) = (Some(i), ratio);
+            }
+        }
+        (disp, rot, worst)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{GROWTH_TARGET, MAX_GROWTH, easy_oci, step_growth};
+
+    /// An easy step's bound lies within the OCI bound, never falls as that bound grows,
+    /// and is 4 of the paper's 6 (two thirds, rounded up).
+    #[test]
+    fn the_easy_bound_lies_within_the_oci_bound() {
+        for m in 1..=100 {
+            let e = easy_oci(m);
+            assert!((1..=m).contains(&e), "max_oci {m}: {e}");
+            assert!(m == 1 || e >= easy_oci(m - 1), "max_oci {m}: {e}");
+        }
+        assert_eq!(easy_oci(6), 4);
+    }
+
+    /// dt grows only after an easy step, by at most `MAX_GROWTH`, and never so far that
+    /// the step's motion scaled with dt passes `GROWTH_TARGET` of d_max or theta_max;
+    /// below that it grows as far as either allows.
+    #[test]
+    fn dt_grows_only_within_the_motion_bounds() {
+        let (d_max, theta_max) = (0.01, 0.02);
+        assert_eq!(step_growth(5, 6, 0.0, 0.0, d_max, theta_max), 1.0);
+        assert_eq!(step_growth(4, 6, 0.0, 0.0, d_max, theta_max), MAX_GROWTH);
+        for i in 0..=40 {
+            for j in 0..=40 {
+                let (disp, rot) = (d_max * i as f64 / 40.0, theta_max * j as f64 / 40.0);
+                let g = step_growth(4, 6, disp, rot, d_max, theta_max);
+                assert!((1.0..=MAX_GROWTH).contains(&g), "{disp} {rot}: {g}");
+                let reach = (g * disp / d_max).max(g * rot / theta_max);
+                if g > 1.0 {
+                    assert!(
+                        reach <= GROWTH_TARGET * (1.0 + 1e-15),
+                        "{disp} {rot}: {reach}"
+                    );
+                }
+                if g < MAX_GROWTH {
+                    // Held back: the motion already reaches the target or beyond.
+                    assert!(
+                        reach >= GROWTH_TARGET * (1.0 - 1e-15),
+                        "{disp} {rot}: {reach}"
+                    );
+                }
+            }
+        }
+    }
+}

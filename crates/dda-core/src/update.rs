@@ -1,0 +1,94 @@
+//! The update that commits a step: after the physics guard, blocks move by their
+//! solved motion with the rotation exact, stresses accumulate, velocities follow the
+//! constant-acceleration scheme.
+
+use crate::diagnosis::SimError;
+use crate::kinematics::{elasticity, mass_matrix};
+use crate::scene::Mode;
+use crate::simulation::Simulation;
+use crate::state::StepRecord;
+use dda_geom::{check_displacement, displace_point};
+
+impl Simulation {
+    /// Commits the trial solution: moves blocks, updates stresses and velocities, and
+    /// records penetration.
+    pub(crate) fn accept(&mut self, dt: f64, rec: &mut StepRecord) -> Result<(), SimError> {
+        let (mut max_pen, mut deepest) = (0.0f64, None);
+        for (k, c) in self.contacts.contacts.iter().enumerate() {
+            if c.active && c.state.is_closed() {
+                let pen = -self.rows[k].eval(&self.d);
+                if pen > max_pen {
+                    (max_pen, deepest) = (pen, Some(k));
+                }
+            }
+        }
+        self.guard(dt, max_pen, deepest)?;
+        rec.max_penetration = max_pen;
+        rec.dt = dt;
+        // Check every block's motion first, so that a failure leaves the state untouched.
+        let (t, model) = (self.t, &self.model);
+        let inverted = |i: usize| SimError::Inverted {
+            t,
+            block: model.blocks[i].id.clone(),
+        };
+        for i in 0..self.blocks.len() {
+            if self.free[i].is_some() && check_displacement(&self.d[i]).is_err() {
+                return Err(inverted(i));
+            }
+        }
+        let dynamic = model.params.mode == Mode::Dynamic;
+        for i in 0..self.blocks.len() {
+            if self.free[i].is_none() {
+                continue;
+            }
+            let d = self.d[i];
+            let c = self.shapes[i].centroid;
+            let b = &mut self.blocks[i];
+            // Cannot fail: every motion was checked above.
+            b.polygon.displace(c, &d).map_err(|_| inverted(i))?;
+            for v in 0..6 {
+                b.velocity[v] = if dynamic {
+                    2.0 * d[v] / dt - b.velocity[v]
+                } else {
+                    0.0
+                };
+            }
+            if self.effects.elasticity {
+                let mat = self.model.materials[self.model.blocks[i].material];
+                let e = elasticity(mat.young, mat.poisson);
+                for a in 0..3 {
+                    b.stress[a] += (0..3).map(|q| e[a][q] * d[3 + q]).sum::<f64>();
+                }
+            }
+            b.rotation += d[2];
+            for (at, _) in b.loads.iter_mut() {
+                *at = displace_point(*at, c, &d);
+            }
+            for (now, _) in b.fixed_points.iter_mut() {
+                *now = displace_point(*now, c, &d);
+            }
+            self.shapes[i].set(&b.polygon);
+        }
+        self.t += dt;
+        Ok(())
+    }
+
+    /// Kinetic energy of the free blocks, 1/2 V^T M V.
+    pub fn kinetic_energy(&self) -> f64 {
+        let mut e = 0.0;
+        for (i, b) in self.blocks.iter().enumerate() {
+            if self.free[i].is_none() {
+                continue;
+            }
+            let mat = self.model.materials[self.model.blocks[i].material];
+            let m = mass_matrix(&b.polygon.moments(), mat.density);
+            let v = &b.velocity;
+            for a in 0..6 {
+                for bb in 0..6 {
+                    e += 0.5 * v[a] * m[a][bb] * v[bb];
+                }
+            }
+        }
+        e
+    }
+}
