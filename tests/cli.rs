@@ -253,15 +253,16 @@ fn check_and_scenes() {
     }
 }
 
-/// A simulation that cannot go on (one OCI iteration allowed while contacts must change
-/// state) exits 1 and keeps its outputs up to the last good state, with the reason.
+/// A simulation that cannot go on (here: a penalty too soft for the motion, so that a
+/// contact penetrates beyond d_tol) exits 1 and keeps its outputs up to the last good
+/// state, with the reason.
 #[test]
 fn failed_simulation_exits_1_and_keeps_last_good_state() {
     let dir = scratch("fail");
     let scene = variant(
         &dir,
         "fail.toml",
-        &[("frames = 2", "frames = 2\nmax_oci = 1")],
+        &[("normal_penalty = 1e9", "normal_penalty = 2e6")],
     );
     let out = dir.join("out");
     let o = run_file(&scene, &out, &[]);
@@ -274,7 +275,7 @@ fn failed_simulation_exits_1_and_keeps_last_good_state() {
     let s = summary(&out);
     assert_eq!(s["status"], "failed");
     assert!(
-        s["error"].as_str().unwrap().contains("time step"),
+        s["error"].as_str().unwrap().contains("penetration"),
         "{}",
         s["error"]
     );

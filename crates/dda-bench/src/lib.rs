@@ -7,11 +7,13 @@ pub mod builtin;
 pub mod column;
 pub mod hard_cases;
 pub mod layout;
+pub mod masonry;
 pub mod paper;
 pub mod verdict;
 
 pub use self::builtin::{BUILTINS, Builtin, DEFAULT_BUILTIN, builtin};
 pub use self::column::{ColumnError, ColumnSpec, column_scene, jointed_column, paper_analysis};
 pub use self::hard_cases::{HARD_CASES, HardCase, collision_scene};
+pub use self::masonry::{Layout, Masonry};
 pub use self::paper::{PAPER_COLUMNS, PaperColumn};
 pub use self::verdict::{Outcome, judge_collision, judge_collision_with, mechanical_energy};

@@ -1,13 +1,53 @@
 //! The contact law: each active contact re-checked against the trial solution of an
 //! open-close iteration: open or closed by the normal distance (or a bond's tensile
 //! strength), locked or sliding by Mohr-Coulomb.
+//!
+//! **Decisions of negligible force keep the state** (our choice; the paper decides by
+//! signs alone). Every change of state is about a force: the spring force of a contact
+//! that would close (p |d|) or the tension a closed one would have to hold (p d), the
+//! shear force beyond the friction limit of a locked contact that would slide, the
+//! shear spring force a sliding contact would take if it locked. A change is made only
+//! when that force exceeds [`DECISION_BAND`] of the contact's force scale: the external
+//! force (weight and point loads) on the lighter of its two free blocks. Below it the contact keeps its state: a hysteresis band stated in the
+//! step's own forces. Where blocks meet along flush joints (T- and X-junctions, the
+//! two covers of one corner) contacts sit at d_n = 0 with forces that hover around
+//! zero; decided by sign they flip between open and closed, locked and sliding, on
+//! forces of 1e-4 of a block's weight and below, and the iteration never ends.
+//! `docs/method.md`, section 6, gives the measurements.
 
 use crate::simulation::Simulation;
+
+/// Fraction of a contact's force scale (see the module docs) below which a change of its
+/// state is negligible and not made: a closed contact holds that much tension at most,
+/// an open one lets its blocks overlap by that much force over the penalty, a locked one
+/// holds that much beyond its friction limit. Our choice, measured in
+/// `docs/method.md` (section 6): 1e-4, 1e-3 and 1e-2 all let a running-bond wall and a
+/// grid of equal blocks stand; 1e-3 keeps the force error of a decision to a thousandth
+/// of the lighter block's weight.
+pub(crate) const DECISION_BAND: f64 = 1e-3;
 use crate::springs::{contact_length, contact_points, shear_row};
 use dda_contact::ContactState;
-use dda_geom::VertexEdge;
+use dda_geom::{DVec2, VertexEdge};
 
 impl Simulation {
+    /// Sets each block's force scale (see the module docs): the magnitude of the external
+    /// force on a free block, its weight and its point loads; infinite for a fixed block.
+    /// The inertia terms of the time scheme are not forces on the block: a block moving
+    /// at constant speed has none.
+    pub(crate) fn set_force_scale(&mut self) {
+        let g = match self.model.params.gravity {
+            Some(g) if self.effects.gravity => g,
+            _ => DVec2::ZERO,
+        };
+        self.force_scale.clear();
+        self.force_scale.resize(self.blocks.len(), f64::INFINITY);
+        for (mass, &i) in self.mass.iter().zip(&self.free_blocks) {
+            let loads: DVec2 = self.blocks[i as usize].loads.iter().map(|l| l.1).sum();
+            // mass[0][0] is the block's mass (rho times its area).
+            self.force_scale[i as usize] = (mass[0][0] * g + loads).length();
+        }
+    }
+
     /// Re-checks every active contact against the trial solution; returns how many
     /// changed state.
     pub(crate) fn update_states(&mut self) -> usize {
@@ -27,10 +67,15 @@ impl Simulation {
             }
             let j = self.joint(k);
             let d = self.rows[k].eval(&self.d);
+            let key = c.key;
+            // The force below which a change is negligible (see the module docs).
+            let band = DECISION_BAND
+                * self.force_scale[key.vertex_block as usize]
+                    .min(self.force_scale[key.edge_block as usize]);
             let mut n = c;
             match c.state {
                 ContactState::Open => {
-                    if d < 0.0 {
+                    if d < 0.0 && pn * -d > band {
                         // Closes where its trajectory crossed the edge's line.
                         let r1 = self.trial_ratio(&c);
                         let t = if c.d_n > 0.0 {
@@ -55,7 +100,7 @@ impl Simulation {
                     let holds_tension = c.bonded
                         && j.tensile_strength > 0.0
                         && pn * d <= j.tensile_strength * length();
-                    if d > open_band && !holds_tension {
+                    if d > open_band && pn * d > band && !holds_tension {
                         n.state = ContactState::Open;
                         n.bonded = false;
                         n.normal_force = 0.0;
@@ -69,7 +114,7 @@ impl Simulation {
                                 if c.bonded {
                                     limit += j.cohesion * length();
                                 }
-                                if ps * s.abs() > limit {
+                                if ps * s.abs() > limit + band {
                                     n.state = ContactState::Sliding;
                                     n.slide_dir = s.signum();
                                     n.bonded = false;
@@ -80,7 +125,7 @@ impl Simulation {
                                         .eval(&self.d);
                                 if c.slide_dir == 0.0 {
                                     n.slide_dir = s.signum();
-                                } else if s * c.slide_dir < 0.0 {
+                                } else if s * c.slide_dir < 0.0 && ps * s.abs() > band {
                                     // The motion reversed against friction: it sticks.
                                     n.state = ContactState::Locked;
                                     n.locked_r = c.r.clamp(0.0, 1.0);

@@ -89,6 +89,9 @@ pub struct Simulation {
     pub(crate) motions: Vec<Motion>,
     /// Contacts whose state changed in the last OCI iteration (for a diagnosis).
     pub(crate) flipped: Vec<u32>,
+    /// Each block's force scale for the contact law's decisions: the magnitude of the
+    /// external force on it (weight and point loads); infinite for a fixed block.
+    pub(crate) force_scale: Vec<f64>,
     /// Why the run stopped, once it has.
     pub(crate) diagnosis: Option<Diagnosis>,
     /// The physics guard's energy balance (saved).
@@ -250,6 +253,7 @@ impl Simulation {
             d: vec![[0.0; 6]; n],
             motions: Vec::with_capacity(n),
             flipped: Vec::new(),
+            force_scale: Vec::new(),
             diagnosis: None,
             energy: EnergyBalance {
                 supplied: initial,
@@ -399,6 +403,7 @@ impl Simulation {
             let t_asm = Instant::now();
             self.linearise(dt);
             self.base_terms(dt);
+            self.set_force_scale();
             rec.assembly_s += t_asm.elapsed().as_secs_f64();
             if first_attempt {
                 self.predict_states(&mut rec);
