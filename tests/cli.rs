@@ -309,7 +309,7 @@ fn failed_simulation_exits_1_and_keeps_last_good_state() {
     // The last good state: a loadable checkpoint at the time reached, and the last frame.
     let path = out.join("checkpoint.bin");
     let ck = dda_core::Checkpoint::load(&path).unwrap();
-    assert_eq!(ck.state.t, t);
+    assert_eq!(ck.engine.state.t, t);
     let frames = std::fs::read_to_string(out.join("frames.jsonl")).unwrap();
     let last: serde_json::Value = serde_json::from_str(frames.lines().last().unwrap()).unwrap();
     assert_eq!(last["t"].as_f64().unwrap(), t);
@@ -402,7 +402,7 @@ fn killed_run_resumes_to_the_uninterrupted_result() {
     let ck_path = work.join("checkpoint.bin");
     let ck = dda_core::Checkpoint::load(&ck_path)
         .unwrap_or_else(|e| panic!("killed {delay} ms after the first checkpoint: {e}"));
-    assert!(ck.state.totals.steps.is_multiple_of(3) && ck.state.totals.steps > 0);
+    assert!(ck.engine.state.totals.steps.is_multiple_of(3) && ck.engine.state.totals.steps > 0);
     assert!(!out.exists(), "an interrupted run is not moved into place");
 
     // Damaged copies are refused with the reason, and nothing is written.
@@ -779,7 +779,7 @@ fn signals_end_a_run_with_a_checkpoint_that_resumes_bit_for_bit() {
             "{err}"
         );
         let ck = dda_core::Checkpoint::load(&work.join("checkpoint.bin")).unwrap();
-        assert!(ck.state.totals.steps > 0);
+        assert!(ck.engine.state.totals.steps > 0);
         assert!(!out.exists(), "an interrupted run is not moved into place");
         let o = dda(&["resume", out.to_str().unwrap(), "--quiet"]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));

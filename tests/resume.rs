@@ -4,9 +4,7 @@
 // A panic is how a test reports failure.
 #![allow(clippy::unwrap_used)]
 
-use dda_core::{
-    Checkpoint, CheckpointError, OutputMarks, RunOptions, Scene, Simulation, StepRecord,
-};
+use dda_core::{Checkpoint, CheckpointError, RunOptions, Scene, Simulation, StepRecord};
 use std::path::Path;
 
 const SLIDING_BLOCK: &str = concat!(
@@ -59,7 +57,7 @@ fn resumed_run_equals_uninterrupted_run() {
                     first.step().unwrap();
                 }
                 let path = Path::new("checkpoint.bin");
-                let bytes = Checkpoint::of(&first, &scene, OutputMarks::default())
+                let bytes = Checkpoint::of(&first, &scene, String::new())
                     .unwrap()
                     .to_bytes()
                     .unwrap();
@@ -95,7 +93,7 @@ fn checkpoint_bytes() -> Vec<u8> {
     for _ in 0..5 {
         sim.step().unwrap();
     }
-    Checkpoint::of(&sim, &scene, OutputMarks::default())
+    Checkpoint::of(&sim, &scene, String::new())
         .unwrap()
         .to_bytes()
         .unwrap()
@@ -188,7 +186,7 @@ fn threads_give_the_same_steps_bit_for_bit() {
     }
     let untimed_state = |sim: &Simulation| {
         let mut snap = sim.snapshot();
-        let t = &mut snap.totals;
+        let t = &mut snap.state.totals;
         (t.total_s, t.detection_s, t.assembly_s, t.solve_s) = (0.0, 0.0, 0.0, 0.0);
         snap
     };

@@ -19,8 +19,9 @@ use super::signals::{self, Signals};
 use super::{Failure, Resolved, bad, default_out, resolve_scene, validate};
 use clap::Args;
 use dda::report::{Frame, HISTORY_HEADER, frame_resolution, frame_view, history_row};
-use dda_core::{Checkpoint, OutputMarks, RunOptions, Scene, Simulation, Summary};
+use dda_core::{Checkpoint, RunOptions, Scene, Simulation, Summary};
 use indicatif::{ProgressBar, ProgressStyle};
+use serde::{Deserialize, Serialize};
 use std::fs::File;
 use std::io::{BufWriter, IsTerminal, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
@@ -28,6 +29,25 @@ use std::process::ExitCode;
 
 /// The checkpoint file's name in a run directory.
 pub const CHECKPOINT_FILE: &str = "checkpoint.bin";
+
+/// How far a run's output files had got when a checkpoint was taken, so that a resume
+/// cuts them back to that point and appends exactly what the run would have; kept in
+/// the checkpoint as the command's own record (JSON).
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+struct OutputMarks {
+    /// Bytes of history.csv written.
+    history_bytes: u64,
+    /// Bytes of frames.jsonl written.
+    frames_bytes: u64,
+    /// The next instant of the animation grid to record in frames.jsonl.
+    animation_next: u64,
+    /// The next instant of the SVG-frame grid (the scene's `frames`) to record.
+    svg_next: u64,
+    /// Steps between checkpoints (0: only at the end or on failure).
+    checkpoint_every: u64,
+    /// Whether the run goes on through violations of physics (`--keep-going`).
+    keep_going: bool,
+}
 
 /// Options of `run` and `resume` that bound or relax a run.
 #[derive(Debug, Args)]
@@ -246,7 +266,12 @@ pub fn resume(args: ResumeArgs) -> Result<ExitCode, Failure> {
     let ck = Checkpoint::load(&path).map_err(|e| bad(e.to_string()))?;
     let scene = ck.scene(&path).map_err(|e| bad(e.to_string()))?;
     let model = validate(&scene, &path.display().to_string(), None)?;
-    let mut marks = ck.outputs.clone();
+    let mut marks: OutputMarks = serde_json::from_str(&ck.client).map_err(|e| {
+        bad(format!(
+            "{}: its record of the outputs: {e}",
+            path.display()
+        ))
+    })?;
     marks.keep_going |= args.limits.keep_going;
     let sim = ck
         .resume(model, args.limits.options(marks.keep_going), &path)
@@ -423,7 +448,9 @@ impl Job {
     /// Flushes the output files to disk and saves the checkpoint atomically.
     fn checkpoint(&mut self) -> Result<(), Failure> {
         self.flush(true)?;
-        let ck = Checkpoint::of(&self.sim, &self.scene, self.marks.clone())
+        let marks = serde_json::to_string(&self.marks)
+            .map_err(|e| Failure::Output(format!("cannot serialise the checkpoint: {e}")))?;
+        let ck = Checkpoint::of(&self.sim, &self.scene, marks)
             .map_err(|e| Failure::Output(format!("cannot build the checkpoint: {e}")))?;
         ck.save(&self.work.join(CHECKPOINT_FILE))
             .map_err(|e| Failure::Output(format!("cannot write the checkpoint: {e}")))

@@ -194,7 +194,8 @@ pub fn run_one(
     let t = sim.totals();
     row.steps = t.steps;
     row.oci_cycles = t.oci_iterations;
-    (_, row.factorisations, row.low_rank_solves) = sim.factorisations();
+    let counters = sim.solver_counters();
+    (row.factorisations, row.low_rank_solves) = (counters.numeric, counters.low_rank);
     row.detection_s = t.detection_s;
     row.assembly_s = t.assembly_s;
     row.solve_s = t.solve_s;

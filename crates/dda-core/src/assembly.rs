@@ -12,9 +12,9 @@ use crate::simulation::Simulation;
 use crate::solver::{BlockSystem, Entry};
 use crate::springs::{HalfStep, Row, contact_length, normal_row, shear_row};
 use crate::state::{BlockState, StepRecord};
+use crate::timing::{Phase, Stopwatch};
 use dda_contact::{BlockShape, ContactSet, ContactState};
 use dda_geom::DVec2;
-use std::time::Instant;
 
 /// Fewest free blocks for which per-block terms are computed on the thread pool (when
 /// [`RunOptions::parallel`] is on): below it, waking the pool costs more than it saves.
@@ -70,35 +70,37 @@ impl Simulation {
     /// each block's terms depend on that block alone, so the result is the same.
     pub(crate) fn base_terms(&mut self, dt: f64) {
         let n = self.free_blocks.len();
-        self.base_k.resize(n, [[0.0; 6]; 6]);
-        self.base_f.resize(n, [0.0; 6]);
-        self.mass.resize(n, [[0.0; 6]; 6]);
-        let (model, blocks, eff) = (&self.model, &self.blocks, self.effects);
+        self.scratch.base_k.resize(n, [[0.0; 6]; 6]);
+        self.scratch.base_f.resize(n, [0.0; 6]);
+        self.scratch.mass.resize(n, [[0.0; 6]; 6]);
+        let (model, blocks, eff) = (&self.model, &self.state.blocks, self.effects);
         let terms = |(((k, f), mass), &i): (((&mut Mat6, &mut Vec6), &mut Mat6), &u32)| {
             (*k, *f, *mass) = block_terms(model, eff, &blocks[i as usize], i as usize, dt);
         };
         #[cfg(feature = "rayon")]
         if self.options.parallel && n >= PARALLEL_MIN_BLOCKS {
             use rayon::prelude::*;
-            self.base_k
+            self.scratch
+                .base_k
                 .par_iter_mut()
-                .zip(self.base_f.par_iter_mut())
-                .zip(self.mass.par_iter_mut())
+                .zip(self.scratch.base_f.par_iter_mut())
+                .zip(self.scratch.mass.par_iter_mut())
                 .zip(self.free_blocks.par_iter())
                 .for_each(terms);
             return;
         }
-        self.base_k
+        self.scratch
+            .base_k
             .iter_mut()
-            .zip(self.base_f.iter_mut())
-            .zip(self.mass.iter_mut())
+            .zip(self.scratch.base_f.iter_mut())
+            .zip(self.scratch.mass.iter_mut())
             .zip(self.free_blocks.iter())
             .for_each(terms);
     }
 
     /// The joint of a contact.
     pub(crate) fn joint(&self, k: usize) -> JointProps {
-        let key = self.contacts.contacts[k].key;
+        let key = self.state.contacts.contacts[k].key;
         let m = |b: u32| self.material[b as usize] as usize;
         *self
             .model
@@ -108,17 +110,17 @@ impl Simulation {
     /// Sets the half step of every block for an attempt of size `dt` and the contacts'
     /// normal rows, linearised there (see `springs`).
     pub(crate) fn linearise(&mut self, dt: f64) {
-        self.half.clear();
-        for (i, s) in self.shapes.iter().enumerate() {
-            self.half.push(match self.free[i] {
-                Some(_) => HalfStep::new(s.centroid, &self.blocks[i].velocity, dt),
+        self.scratch.half.clear();
+        for (i, s) in self.scratch.shapes.iter().enumerate() {
+            self.scratch.half.push(match self.free[i] {
+                Some(_) => HalfStep::new(s.centroid, &self.state.blocks[i].velocity, dt),
                 None => HalfStep::at_rest(s.centroid),
             });
         }
-        self.rows.clear();
-        for c in &self.contacts.contacts {
-            self.rows.push(if c.active {
-                normal_row(c, &self.shapes, &self.half)
+        self.scratch.rows.clear();
+        for c in &self.state.contacts.contacts {
+            self.scratch.rows.push(if c.active {
+                normal_row(c, &self.scratch.shapes, &self.scratch.half)
             } else {
                 NO_ROW
             });
@@ -129,19 +131,19 @@ impl Simulation {
     /// closed contacts' normal springs, and, where the joint has shear, locked contacts'
     /// shear springs and sliding contacts' friction forces.
     pub(crate) fn collect_springs(&mut self) {
-        self.springs.clear();
-        self.forces.clear();
+        self.scratch.springs.clear();
+        self.scratch.forces.clear();
         let p = &self.model.params;
         let (pn, ps) = (p.normal_penalty, p.shear_penalty);
-        for (pk, pc) in self.contacts.pairs.iter().enumerate() {
-            let entry = self.pair_entry[pk];
+        for (pk, pc) in self.state.contacts.pairs.iter().enumerate() {
+            let entry = self.scratch.pair_entry[pk];
             for k in pc.start as usize..pc.end as usize {
-                let c = self.contacts.contacts[k];
+                let c = self.state.contacts.contacts[k];
                 if !(c.active && c.state.is_closed()) {
                     continue;
                 }
                 let contact = k as u32;
-                self.springs.push(Spring {
+                self.scratch.springs.push(Spring {
                     contact,
                     shear: false,
                     penalty: pn,
@@ -154,7 +156,7 @@ impl Simulation {
                 }
                 match c.state {
                     ContactState::Locked => {
-                        self.springs.push(Spring {
+                        self.scratch.springs.push(Spring {
                             contact,
                             shear: true,
                             penalty: ps,
@@ -165,10 +167,17 @@ impl Simulation {
                     ContactState::Sliding if c.slide_dir != 0.0 => {
                         let mut limit = c.normal_force.max(0.0) * j.tan_phi;
                         if c.bonded {
-                            limit += j.cohesion * contact_length(&c, &self.shapes);
+                            limit += j.cohesion * contact_length(&c, &self.scratch.shapes);
                         }
-                        let row = shear_row(&c, &self.shapes, &self.half, c.r.clamp(0.0, 1.0));
-                        self.forces.push((contact, -c.slide_dir * limit, row));
+                        let row = shear_row(
+                            &c,
+                            &self.scratch.shapes,
+                            &self.scratch.half,
+                            c.r.clamp(0.0, 1.0),
+                        );
+                        self.scratch
+                            .forces
+                            .push((contact, -c.slide_dir * limit, row));
                     }
                     _ => {}
                 }
@@ -181,26 +190,31 @@ impl Simulation {
     /// geometry, so the same bits).
     #[inline]
     pub(crate) fn spring_row(&self, s: &Spring) -> Row {
-        s.row(&self.rows, &self.contacts, &self.shapes, &self.half)
+        s.row(
+            &self.scratch.rows,
+            &self.state.contacts,
+            &self.scratch.shapes,
+            &self.scratch.half,
+        )
     }
 
     /// Adds the right-hand side of the base terms, the springs and the forces.
     pub(crate) fn assemble_rhs(&mut self) {
-        for (f, rhs) in self.base_f.iter().enumerate() {
-            self.system.add_rhs(f as u32, 1.0, rhs);
+        for (f, rhs) in self.scratch.base_f.iter().enumerate() {
+            self.scratch.system.add_rhs(f as u32, 1.0, rhs);
         }
-        for s in &self.springs {
+        for s in &self.scratch.springs {
             let row = self.spring_row(s);
             for (b, c) in row.blocks.iter().zip(&row.c) {
                 if let Some(f) = self.free[*b as usize] {
-                    self.system.add_rhs(f, -s.penalty * row.g0, c);
+                    self.scratch.system.add_rhs(f, -s.penalty * row.g0, c);
                 }
             }
         }
-        for (_, f, row) in &self.forces {
+        for (_, f, row) in &self.scratch.forces {
             for (b, c) in row.blocks.iter().zip(&row.c) {
                 if let Some(fi) = self.free[*b as usize] {
-                    self.system.add_rhs(fi, *f, c);
+                    self.scratch.system.add_rhs(fi, *f, c);
                 }
             }
         }
@@ -208,25 +222,38 @@ impl Simulation {
 
     /// Assembles K (base terms and springs) and F, and factorises and solves.
     pub(crate) fn assemble_and_factorise(&mut self, rec: &mut StepRecord) -> Result<(), SimError> {
-        let t0 = Instant::now();
-        self.system.clear();
-        for (f, k) in self.base_k.iter().enumerate() {
-            self.system.add_diagonal(f as u32, k);
+        let mut watch = Stopwatch::start();
+        self.scratch.system.clear();
+        for (f, k) in self.scratch.base_k.iter().enumerate() {
+            self.scratch.system.add_diagonal(f as u32, k);
         }
-        for s in &self.springs {
+        for s in &self.scratch.springs {
             let row = self.spring_row(s);
-            add_spring(&mut self.system, &self.free, s.entry, s.penalty, &row);
+            add_spring(
+                &mut self.scratch.system,
+                &self.free,
+                s.entry,
+                s.penalty,
+                &row,
+            );
         }
         self.assemble_rhs();
-        let t1 = Instant::now();
-        rec.assembly_s += (t1 - t0).as_secs_f64();
-        self.system
+        watch.lap(rec, Phase::Assembly);
+        self.scratch
+            .system
             .solve()
-            .map_err(|source| SimError::Solve { t: self.t, source })?;
-        rec.solve_s += t1.elapsed().as_secs_f64();
-        self.factored_springs.clone_from(&self.springs);
-        self.factored_forces.clone_from(&self.forces);
-        self.factor_current = true;
+            .map_err(|source| SimError::Solve {
+                t: self.state.t,
+                source,
+            })?;
+        watch.lap(rec, Phase::Solve);
+        self.scratch
+            .factored_springs
+            .clone_from(&self.scratch.springs);
+        self.scratch
+            .factored_forces
+            .clone_from(&self.scratch.forces);
+        self.scratch.factor_current = true;
         Ok(())
     }
 }

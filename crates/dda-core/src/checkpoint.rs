@@ -24,39 +24,24 @@ pub const CHECKPOINT_MAGIC: [u8; 8] = *b"DDA-CKPT";
 
 /// The format version written; files of another version are refused. Version 2: the
 /// contacts' pairs carry the cover detector's deep flag. Version 3: the physics guard's
-/// energy balance and recorded violations.
+/// energy balance and recorded violations; the engine's state as one record and the
+/// running program's record apart from it.
 pub const CHECKPOINT_VERSION: u32 = 3;
 
 /// Length of the header before the payload.
 const HEADER_LEN: usize = 24;
 
-/// How far a run's output files had got when the checkpoint was taken, so that a resume
-/// cuts them back to that point and appends exactly what the run would have.
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub struct OutputMarks {
-    /// Bytes of history.csv written.
-    pub history_bytes: u64,
-    /// Bytes of frames.jsonl written.
-    pub frames_bytes: u64,
-    /// The next instant of the animation grid to record in frames.jsonl.
-    pub animation_next: u64,
-    /// The next instant of the SVG-frame grid (the scene's `frames`) to record.
-    pub svg_next: u64,
-    /// Steps between checkpoints (0: only at the end or on failure).
-    pub checkpoint_every: u64,
-    /// Whether the run goes on through violations of physics (`--keep-going`).
-    pub keep_going: bool,
-}
-
-/// What a checkpoint file holds.
+/// What a checkpoint file holds: the scene, the engine's state, and the bookkeeping of
+/// the program that ran it (opaque here: the `dda` command keeps how far its output
+/// files had got).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Checkpoint {
     /// The scene as run (overrides applied), as JSON: validated again on resume.
     pub scene_json: String,
-    /// Output progress.
-    pub outputs: OutputMarks,
-    /// The simulation state.
-    pub state: Snapshot,
+    /// The engine's state.
+    pub engine: Snapshot,
+    /// The running program's own record, as it wrote it (empty for a library user).
+    pub client: String,
 }
 
 /// Why a checkpoint could not be read or written.
@@ -118,13 +103,14 @@ pub enum CheckpointError {
 }
 
 impl Checkpoint {
-    /// The checkpoint of `sim`, run from `scene`, with output progress `outputs`.
-    pub fn of(sim: &Simulation, scene: &Scene, outputs: OutputMarks) -> Result<Self, String> {
+    /// The checkpoint of `sim`, run from `scene`, with the running program's record
+    /// `client`.
+    pub fn of(sim: &Simulation, scene: &Scene, client: String) -> Result<Self, String> {
         let scene_json = serde_json::to_string(scene).map_err(|e| e.to_string())?;
         Ok(Checkpoint {
             scene_json,
-            outputs,
-            state: sim.snapshot(),
+            engine: sim.snapshot(),
+            client,
         })
     }
 
@@ -240,7 +226,7 @@ impl Checkpoint {
         options: RunOptions,
         path: &Path,
     ) -> Result<Simulation, CheckpointError> {
-        Simulation::restore(model, options, self.state).map_err(|message| {
+        Simulation::restore(model, options, self.engine).map_err(|message| {
             CheckpointError::Invalid {
                 path: path.to_path_buf(),
                 message,

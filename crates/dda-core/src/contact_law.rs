@@ -39,12 +39,18 @@ impl Simulation {
             Some(g) if self.effects.gravity => g,
             _ => DVec2::ZERO,
         };
-        self.force_scale.clear();
-        self.force_scale.resize(self.blocks.len(), f64::INFINITY);
-        for (mass, &i) in self.mass.iter().zip(&self.free_blocks) {
-            let loads: DVec2 = self.blocks[i as usize].loads.iter().map(|l| l.1).sum();
+        self.scratch.force_scale.clear();
+        self.scratch
+            .force_scale
+            .resize(self.state.blocks.len(), f64::INFINITY);
+        for (mass, &i) in self.scratch.mass.iter().zip(&self.free_blocks) {
+            let loads: DVec2 = self.state.blocks[i as usize]
+                .loads
+                .iter()
+                .map(|l| l.1)
+                .sum();
             // mass[0][0] is the block's mass (rho times its area).
-            self.force_scale[i as usize] = (mass[0][0] * g + loads).length();
+            self.scratch.force_scale[i as usize] = (mass[0][0] * g + loads).length();
         }
     }
 
@@ -59,19 +65,19 @@ impl Simulation {
         // band, p * 1e-9 d_tol, is negligible (our choice; the paper is silent).
         let open_band = 1e-9 * p.d_tol;
         let mut changed = 0;
-        self.flipped.clear();
-        for k in 0..self.contacts.contacts.len() {
-            let c = self.contacts.contacts[k];
+        self.scratch.flipped.clear();
+        for k in 0..self.state.contacts.contacts.len() {
+            let c = self.state.contacts.contacts[k];
             if !c.active {
                 continue;
             }
             let j = self.joint(k);
-            let d = self.rows[k].eval(&self.d);
+            let d = self.scratch.rows[k].eval(&self.scratch.d);
             let key = c.key;
             // The force below which a change is negligible (see the module docs).
             let band = DECISION_BAND
-                * self.force_scale[key.vertex_block as usize]
-                    .min(self.force_scale[key.edge_block as usize]);
+                * self.scratch.force_scale[key.vertex_block as usize]
+                    .min(self.scratch.force_scale[key.edge_block as usize]);
             let mut n = c;
             match c.state {
                 ContactState::Open => {
@@ -96,7 +102,7 @@ impl Simulation {
                 ContactState::Locked | ContactState::Sliding => {
                     // Only bonds need the length: looked up (a load from the edge block's
                     // shape, often a cache miss) only for them.
-                    let length = || contact_length(&c, &self.shapes);
+                    let length = || contact_length(&c, &self.scratch.shapes);
                     let holds_tension = c.bonded
                         && j.tensile_strength > 0.0
                         && pn * d <= j.tensile_strength * length();
@@ -108,8 +114,13 @@ impl Simulation {
                         n.normal_force = -pn * d;
                         if j.has_shear() {
                             if c.state == ContactState::Locked {
-                                let s = shear_row(&c, &self.shapes, &self.half, c.locked_r)
-                                    .eval(&self.d);
+                                let s = shear_row(
+                                    &c,
+                                    &self.scratch.shapes,
+                                    &self.scratch.half,
+                                    c.locked_r,
+                                )
+                                .eval(&self.scratch.d);
                                 let mut limit = n.normal_force.max(0.0) * j.tan_phi;
                                 if c.bonded {
                                     limit += j.cohesion * length();
@@ -120,9 +131,13 @@ impl Simulation {
                                     n.bonded = false;
                                 }
                             } else {
-                                let s =
-                                    shear_row(&c, &self.shapes, &self.half, c.r.clamp(0.0, 1.0))
-                                        .eval(&self.d);
+                                let s = shear_row(
+                                    &c,
+                                    &self.scratch.shapes,
+                                    &self.scratch.half,
+                                    c.r.clamp(0.0, 1.0),
+                                )
+                                .eval(&self.scratch.d);
                                 if c.slide_dir == 0.0 {
                                     n.slide_dir = s.signum();
                                 } else if s * c.slide_dir < 0.0 && ps * s.abs() > band {
@@ -137,20 +152,20 @@ impl Simulation {
             }
             if n.state != c.state || n.slide_dir != c.slide_dir {
                 changed += 1;
-                self.flipped.push(k as u32);
+                self.scratch.flipped.push(k as u32);
             }
-            self.contacts.contacts[k] = n;
+            self.state.contacts.contacts[k] = n;
         }
         changed
     }
 
     /// Projection ratio of a contact's vertex on its edge at the trial positions.
     pub(crate) fn trial_ratio(&self, c: &dda_contact::Contact) -> f64 {
-        let (p1, p2, p3) = contact_points(c, &self.shapes);
+        let (p1, p2, p3) = contact_points(c, &self.scratch.shapes);
         let k = c.key;
         let (mv, me) = (
-            &self.motions[k.vertex_block as usize],
-            &self.motions[k.edge_block as usize],
+            &self.scratch.motions[k.vertex_block as usize],
+            &self.scratch.motions[k.edge_block as usize],
         );
         VertexEdge::new(mv.apply(p1), me.apply(p2), me.apply(p3)).r
     }

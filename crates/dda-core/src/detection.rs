@@ -20,31 +20,37 @@ impl Simulation {
     /// engine's normalisation: closed contacts of frictionless joints slide (no shear
     /// spring), and at t = 0 closed contacts of bonding joints start bonded.
     pub(crate) fn detect_step_start(&mut self) {
-        self.aabbs.clear();
-        self.aabbs.extend(self.shapes.iter().map(|s| s.aabb));
-        self.neighbours
-            .find(&self.aabbs, self.detection.d_tol, &mut self.pairs);
+        self.scratch.aabbs.clear();
+        self.scratch
+            .aabbs
+            .extend(self.scratch.shapes.iter().map(|s| s.aabb));
+        self.scratch.neighbours.find(
+            &self.scratch.aabbs,
+            self.detection.d_tol,
+            &mut self.scratch.pairs,
+        );
         let free = &self.free;
-        self.pairs
+        self.scratch
+            .pairs
             .retain(|p| free[p.a as usize].is_some() || free[p.b as usize].is_some());
-        std::mem::swap(&mut self.prev, &mut self.contacts);
+        std::mem::swap(&mut self.scratch.prev, &mut self.state.contacts);
         dda_contact::detect(
             self.detector.as_ref(),
-            &self.shapes,
-            &self.pairs,
+            &self.scratch.shapes,
+            &self.scratch.pairs,
             &self.detection,
-            &self.prev,
+            &self.scratch.prev,
             self.options.parallel,
-            &mut self.contacts,
+            &mut self.state.contacts,
         );
-        let first = self.totals.steps == 0;
-        for k in 0..self.contacts.contacts.len() {
+        let first = self.state.totals.steps == 0;
+        for k in 0..self.state.contacts.contacts.len() {
             // Open contacts are left as they are: only closed ones need their joint.
-            if !self.contacts.contacts[k].state.is_closed() {
+            if !self.state.contacts.contacts[k].state.is_closed() {
                 continue;
             }
             let j = self.joint(k);
-            let c = &mut self.contacts.contacts[k];
+            let c = &mut self.state.contacts.contacts[k];
             if !j.has_shear() {
                 c.state = ContactState::Sliding;
             }
@@ -52,7 +58,10 @@ impl Simulation {
                 c.bonded = true;
             }
         }
-        self.track_list
-            .rebuild(self.detector.as_ref(), &self.shapes, &self.contacts);
+        self.scratch.track_list.rebuild(
+            self.detector.as_ref(),
+            &self.scratch.shapes,
+            &self.state.contacts,
+        );
     }
 }

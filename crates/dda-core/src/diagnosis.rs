@@ -106,7 +106,7 @@ impl Simulation {
         let mut contacts: Vec<usize> = Vec::new();
         match e {
             SimError::TimeStepCollapsed { reason, .. } if reason.contains("open-close") => {
-                contacts.extend(self.flipped.iter().map(|&k| k as usize));
+                contacts.extend(self.scratch.flipped.iter().map(|&k| k as usize));
             }
             SimError::TimeStepCollapsed { .. } => blocks.extend(worst),
             SimError::Inverted { block, .. } | SimError::NonFinite { block, .. } => {
@@ -119,8 +119,8 @@ impl Simulation {
         }
         if contacts.is_empty() {
             // The closed contacts of the blocks named.
-            contacts.extend((0..self.contacts.len()).filter(|&k| {
-                let c = &self.contacts.contacts[k];
+            contacts.extend((0..self.state.contacts.len()).filter(|&k| {
+                let c = &self.state.contacts.contacts[k];
                 let key = c.key;
                 c.active
                     && c.state.is_closed()
@@ -131,7 +131,7 @@ impl Simulation {
         }
         contacts.truncate(DIAGNOSIS_LIMIT);
         for &k in &contacts {
-            let key = self.contacts.contacts.get(k).map(|c| c.key);
+            let key = self.state.contacts.contacts.get(k).map(|c| c.key);
             if let Some(key) = key {
                 for b in [key.vertex_block as usize, key.edge_block as usize] {
                     if !blocks.contains(&b) {
@@ -144,7 +144,7 @@ impl Simulation {
         let id = |b: usize| self.model.blocks[b].id.clone();
         let notes = contacts
             .iter()
-            .filter_map(|&k| self.contacts.contacts.get(k))
+            .filter_map(|&k| self.state.contacts.contacts.get(k))
             .map(|c| ContactNote {
                 vertex_block: id(c.key.vertex_block as usize),
                 vertex: c.key.vertex,
@@ -159,9 +159,9 @@ impl Simulation {
                 d_n: c.d_n,
             })
             .collect();
-        self.diagnosis = Some(Diagnosis {
+        self.scratch.diagnosis = Some(Diagnosis {
             reason: e.to_string(),
-            t: self.t,
+            t: self.state.t,
             last_dt,
             blocks: blocks.into_iter().map(id).collect(),
             contacts: notes,

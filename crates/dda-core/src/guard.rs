@@ -112,13 +112,17 @@ impl Simulation {
             DVec2::ZERO
         };
         let (mut mechanical, mut work) = (0.0, 0.0);
-        let mut gains = std::mem::take(&mut self.gains);
+        let mut gains = std::mem::take(&mut self.scratch.gains);
         gains.clear();
         for (f, &i) in self.free_blocks.iter().enumerate() {
             let i = i as usize;
-            let (d, b, s) = (&self.d[i], &self.blocks[i], &self.shapes[i]);
+            let (d, b, s) = (
+                &self.scratch.d[i],
+                &self.state.blocks[i],
+                &self.scratch.shapes[i],
+            );
             let mat = self.model.materials[self.material[i] as usize];
-            let mass = &self.mass[f];
+            let mass = &self.scratch.mass[f];
             let area = mass[0][0] / mat.density;
             let ke = if dynamic {
                 let v: Vec6 = std::array::from_fn(|a| 2.0 * d[a] / dt - b.velocity[a]);
@@ -141,8 +145,8 @@ impl Simulation {
             }
             gains.push((ke - kinetic(mass, &b.velocity), i));
         }
-        let supplied = self.energy.supplied + work;
-        let reference = self.energy.supplied_max.max(supplied) + self.energy_floor;
+        let supplied = self.state.energy.supplied + work;
+        let reference = self.state.energy.supplied_max.max(supplied) + self.energy_floor;
         let excess = mechanical - supplied;
         let ratio = if reference > 0.0 {
             excess / reference
@@ -154,7 +158,7 @@ impl Simulation {
         let id = |i: usize| self.model.blocks[i].id.clone();
         let mut broken = Vec::new();
         if max_pen > p.d_tol {
-            let (what, blocks) = match deepest.map(|k| self.contacts.contacts[k].key) {
+            let (what, blocks) = match deepest.map(|k| self.state.contacts.contacts[k].key) {
                 Some(k) => (
                     format!(
                         "penetration {max_pen:.3e} m beyond the contact tolerance {:.3e} m, \
@@ -187,34 +191,34 @@ impl Simulation {
             );
             broken.push(("energy", what, blocks, ratio));
         }
-        self.gains = gains;
+        self.scratch.gains = gains;
         if let Some((_, what, blocks, _)) = broken.first()
             && self.options.stop_on_violation
         {
             return Err(SimError::BrokenPhysics {
-                t: self.t,
+                t: self.state.t,
                 what: what.clone(),
                 blocks: blocks.clone(),
             });
         }
         for (kind, what, _, worst) in broken {
-            match self.violations.iter_mut().find(|v| v.kind == kind) {
+            match self.state.violations.iter_mut().find(|v| v.kind == kind) {
                 Some(v) => {
                     v.steps += 1;
                     v.worst = v.worst.max(worst);
                 }
-                None => self.violations.push(Violation {
+                None => self.state.violations.push(Violation {
                     kind: kind.to_string(),
                     first: what,
-                    first_t: self.t,
+                    first_t: self.state.t,
                     steps: 1,
                     worst,
                 }),
             }
         }
-        self.energy.supplied = supplied;
-        self.energy.supplied_max = self.energy.supplied_max.max(supplied);
-        self.energy.worst_ratio = self.energy.worst_ratio.max(ratio);
+        self.state.energy.supplied = supplied;
+        self.state.energy.supplied_max = self.state.energy.supplied_max.max(supplied);
+        self.state.energy.worst_ratio = self.state.energy.worst_ratio.max(ratio);
         Ok(())
     }
 }

@@ -10,9 +10,9 @@ use crate::simulation::Simulation;
 use crate::solver::RankOne;
 use crate::springs::{Row, normal_row};
 use crate::state::StepRecord;
+use crate::timing::{Phase, Stopwatch};
 use dda_contact::ContactState;
 use dda_geom::Motion;
-use std::time::Instant;
 
 /// Most springs that may differ from the factorised matrix before an OCI iteration
 /// assembles and factorises anew rather than solving through a low-rank update. Measured
@@ -37,22 +37,20 @@ impl Simulation {
     /// every state and convergence with exact solves. Skipped when the pattern changed.
     /// (Our choice: the paper starts the OCI from the previous step's states.)
     pub(crate) fn predict_states(&mut self, rec: &mut StepRecord) {
-        if !self.system.is_factored() {
+        if !self.scratch.system.is_factored() {
             return;
         }
-        let t0 = Instant::now();
+        let mut watch = Stopwatch::start();
         self.collect_springs();
-        self.system.clear_rhs();
+        self.scratch.system.clear_rhs();
         self.assemble_rhs();
-        let t1 = Instant::now();
-        rec.assembly_s += (t1 - t0).as_secs_f64();
-        let solved = self.system.resolve();
-        rec.solve_s += t1.elapsed().as_secs_f64();
+        watch.lap(rec, Phase::Assembly);
+        let solved = self.scratch.system.resolve();
+        watch.lap(rec, Phase::Solve);
         if solved {
-            let t2 = Instant::now();
             self.gather_solution();
             self.update_states();
-            rec.assembly_s += t2.elapsed().as_secs_f64();
+            watch.lap(rec, Phase::Assembly);
         }
     }
 
@@ -65,28 +63,29 @@ impl Simulation {
         let max_oci = self.model.params.max_oci;
         for it in 1..=max_oci {
             self.solve_states(rec)?;
-            let t2 = Instant::now();
+            let mut watch = Stopwatch::start();
             self.gather_solution();
-            if let Some(i) = (0..self.d.len()).find(|&i| self.d[i].iter().any(|x| !x.is_finite())) {
+            if let Some(i) = (0..self.scratch.d.len())
+                .find(|&i| self.scratch.d[i].iter().any(|x| !x.is_finite()))
+            {
                 return Err(SimError::NonFinite {
-                    t: self.t,
+                    t: self.state.t,
                     block: self.model.blocks[i].id.clone(),
                 });
             }
             let mut changed = self.update_states();
-            rec.assembly_s += t2.elapsed().as_secs_f64();
-            let t3 = Instant::now();
-            let activated = self.track_list.track(
+            watch.lap(rec, Phase::Assembly);
+            let activated = self.scratch.track_list.track(
                 self.detector.as_ref(),
-                &self.shapes,
-                &self.motions,
-                &mut self.contacts,
+                &self.scratch.shapes,
+                &self.scratch.motions,
+                &mut self.state.contacts,
             );
             if activated > 0 {
                 self.set_up_new_active();
             }
             changed += activated;
-            rec.detection_s += t3.elapsed().as_secs_f64();
+            watch.lap(rec, Phase::Detection);
             if changed == 0 {
                 return Ok((true, it));
             }
@@ -97,23 +96,28 @@ impl Simulation {
     /// Solves for the current contact states: through the factor already computed when
     /// few springs changed since, otherwise by assembling and factorising anew.
     pub(crate) fn solve_states(&mut self, rec: &mut StepRecord) -> Result<(), SimError> {
-        let t0 = Instant::now();
+        let mut watch = Stopwatch::start();
         self.collect_springs();
-        let shear = self.springs.iter().filter(|s| s.shear).count() as u64;
-        self.totals.shear_springs += shear;
-        self.totals.normal_springs += self.springs.len() as u64 - shear;
-        self.totals.friction_forces += self.forces.len() as u64;
-        if self.factor_current && self.system.is_factored() && self.spring_changes().is_some() {
+        let shear = self.scratch.springs.iter().filter(|s| s.shear).count() as u64;
+        self.state.totals.shear_springs += shear;
+        self.state.totals.normal_springs += self.scratch.springs.len() as u64 - shear;
+        self.state.totals.friction_forces += self.scratch.forces.len() as u64;
+        if self.scratch.factor_current
+            && self.scratch.system.is_factored()
+            && self.spring_changes().is_some()
+        {
             self.force_changes();
-            let t1 = Instant::now();
-            rec.assembly_s += (t1 - t0).as_secs_f64();
-            let solved = self.system.solve_low_rank(&self.changes, &self.rhs_changes);
-            rec.solve_s += t1.elapsed().as_secs_f64();
+            watch.lap(rec, Phase::Assembly);
+            let solved = self
+                .scratch
+                .system
+                .solve_low_rank(&self.scratch.changes, &self.scratch.rhs_changes);
+            watch.lap(rec, Phase::Solve);
             if solved {
                 return Ok(());
             }
         } else {
-            rec.assembly_s += t0.elapsed().as_secs_f64();
+            watch.lap(rec, Phase::Assembly);
         }
         self.assemble_and_factorise(rec)
     }
@@ -122,13 +126,18 @@ impl Simulation {
     /// as rank-one terms (both lists are in contact order); None if it has more than
     /// [`MAX_RANK`] terms.
     pub(crate) fn spring_changes(&mut self) -> Option<()> {
-        self.changes.clear();
-        self.rhs_changes.clear();
-        let (now, then) = (&self.springs, &self.factored_springs);
+        self.scratch.changes.clear();
+        self.scratch.rhs_changes.clear();
+        let (now, then) = (&self.scratch.springs, &self.scratch.factored_springs);
         let (mut i, mut j) = (0, 0);
         let free = &self.free;
-        let (rows, set, shapes, half) = (&self.rows, &self.contacts, &self.shapes, &self.half);
-        let (changes, rhs_changes) = (&mut self.changes, &mut self.rhs_changes);
+        let (rows, set, shapes, half) = (
+            &self.scratch.rows,
+            &self.state.contacts,
+            &self.scratch.shapes,
+            &self.scratch.half,
+        );
+        let (changes, rhs_changes) = (&mut self.scratch.changes, &mut self.scratch.rhs_changes);
         // A spring added (sign 1) or removed (-1): its stiffness p c c^T and its
         // right-hand side -p g0 c.
         let mut change = |s: &Spring, sign: f64| {
@@ -183,10 +192,10 @@ impl Simulation {
     /// Adds the changes of the friction forces since the factorisation to the
     /// right-hand side changes (both lists are in contact order).
     pub(crate) fn force_changes(&mut self) {
-        let (now, then) = (&self.forces, &self.factored_forces);
+        let (now, then) = (&self.scratch.forces, &self.scratch.factored_forces);
         let free = &self.free;
         let mut change = |f: f64, row: &Row| {
-            self.rhs_changes.push(RankOne {
+            self.scratch.rhs_changes.push(RankOne {
                 blocks: [free[row.blocks[0] as usize], free[row.blocks[1] as usize]],
                 c: row.c,
                 s: f,
@@ -227,14 +236,16 @@ impl Simulation {
     /// Copies the solution into per-block motions (zero for fixed blocks).
     pub(crate) fn gather_solution(&mut self) {
         let nd = self.nd;
-        self.motions.clear();
+        self.scratch.motions.clear();
         for (i, f) in self.free.iter().enumerate() {
-            self.d[i] = [0.0; 6];
+            self.scratch.d[i] = [0.0; 6];
             if let Some(f) = f {
-                self.d[i][..nd].copy_from_slice(self.system.solution(*f));
+                self.scratch.d[i][..nd].copy_from_slice(self.scratch.system.solution(*f));
             }
-            self.motions
-                .push(Motion::new(self.shapes[i].centroid, &self.d[i]));
+            self.scratch.motions.push(Motion::new(
+                self.scratch.shapes[i].centroid,
+                &self.scratch.d[i],
+            ));
         }
     }
 
@@ -245,14 +256,14 @@ impl Simulation {
     /// other closed contact of such a joint slides already: the step-start normalisation
     /// and `update_states` see to it).
     pub(crate) fn set_up_new_active(&mut self) {
-        for k in 0..self.contacts.contacts.len() {
-            let c = self.contacts.contacts[k];
-            if !(c.active && self.rows[k].g0.is_nan()) {
+        for k in 0..self.state.contacts.contacts.len() {
+            let c = self.state.contacts.contacts[k];
+            if !(c.active && self.scratch.rows[k].g0.is_nan()) {
                 continue;
             }
-            self.rows[k] = normal_row(&c, &self.shapes, &self.half);
+            self.scratch.rows[k] = normal_row(&c, &self.scratch.shapes, &self.scratch.half);
             if c.state == ContactState::Locked && !self.joint(k).has_shear() {
-                self.contacts.contacts[k].state = ContactState::Sliding;
+                self.state.contacts.contacts[k].state = ContactState::Sliding;
             }
         }
     }

@@ -19,46 +19,56 @@ impl Simulation {
     /// Fixes the pattern of the global matrix from the candidate pairs between free
     /// blocks, reusing the symbolic factorisation when the pattern is unchanged.
     pub(crate) fn set_pattern(&mut self) -> Result<(), SimError> {
-        self.block_pairs.clear();
-        for pc in &self.contacts.pairs {
+        self.scratch.block_pairs.clear();
+        for pc in &self.state.contacts.pairs {
             if let (Some(a), Some(b)) =
                 (self.free[pc.pair.a as usize], self.free[pc.pair.b as usize])
             {
-                self.block_pairs.push((a.min(b), a.max(b)));
+                self.scratch.block_pairs.push((a.min(b), a.max(b)));
             }
         }
-        self.block_pairs.sort_unstable();
-        self.block_pairs.dedup();
-        if !is_subset(&self.block_pairs, &self.pattern) {
+        self.scratch.block_pairs.sort_unstable();
+        self.scratch.block_pairs.dedup();
+        if !is_subset(&self.scratch.block_pairs, &self.state.pattern) {
             // A new pattern: the needed pairs and every free pair whose polygons are
             // within PATTERN_MARGIN d_tol (separating-axis gap), contacts or not, so that
             // it holds while blocks shift among their neighbours. It is kept until a
             // needed pair is missing.
-            self.pattern.clone_from(&self.block_pairs);
+            self.state.pattern.clone_from(&self.scratch.block_pairs);
             let margin = PATTERN_MARGIN * self.detection.d_tol;
-            self.neighbours
-                .find(&self.aabbs, margin, &mut self.pattern_pairs);
-            for q in &self.pattern_pairs {
-                let (pa, pb) = (&self.blocks[q.a as usize], &self.blocks[q.b as usize]);
+            self.scratch.neighbours.find(
+                &self.scratch.aabbs,
+                margin,
+                &mut self.scratch.pattern_pairs,
+            );
+            for q in &self.scratch.pattern_pairs {
+                let (pa, pb) = (
+                    &self.state.blocks[q.a as usize],
+                    &self.state.blocks[q.b as usize],
+                );
                 if let (Some(a), Some(b)) = (self.free[q.a as usize], self.free[q.b as usize])
                     && separation(&pa.polygon, &pb.polygon).0 < margin
                 {
-                    self.pattern.push((a.min(b), a.max(b)));
+                    self.state.pattern.push((a.min(b), a.max(b)));
                 }
             }
-            self.pattern.sort_unstable();
-            self.pattern.dedup();
+            self.state.pattern.sort_unstable();
+            self.state.pattern.dedup();
         }
-        self.system
-            .set_pattern(self.n_free, self.nd, &self.pattern)
-            .map_err(|source| SimError::Solve { t: self.t, source })?;
-        self.pair_entry.clear();
-        for pc in &self.contacts.pairs {
+        self.scratch
+            .system
+            .set_pattern(self.n_free, self.nd, &self.state.pattern)
+            .map_err(|source| SimError::Solve {
+                t: self.state.t,
+                source,
+            })?;
+        self.scratch.pair_entry.clear();
+        for pc in &self.state.contacts.pairs {
             let e = match (self.free[pc.pair.a as usize], self.free[pc.pair.b as usize]) {
-                (Some(a), Some(b)) => self.system.entry(a, b),
+                (Some(a), Some(b)) => self.scratch.system.entry(a, b),
                 _ => None,
             };
-            self.pair_entry.push(e);
+            self.scratch.pair_entry.push(e);
         }
         Ok(())
     }

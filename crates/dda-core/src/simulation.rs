@@ -18,18 +18,20 @@ use crate::effects::Effects;
 use crate::guard::{self, EnergyBalance, Violation};
 use crate::kinematics::{Mat6, Vec6, mass_matrix};
 use crate::scene::Model;
-use crate::solver::{BlockSystem, Entry, RankOne};
+use crate::solver::{BlockSystem, Entry, RankOne, SolverCounters};
 use crate::springs::{HalfStep, Row};
-use crate::state::{BlockState, StepRecord, Totals};
+use crate::state::{BlockState, RunState, StepRecord, Totals};
 use crate::time_step::{DT_FLOOR, motion_room, step_growth};
+use crate::timing::{Phase, Stopwatch};
 use dda_contact::{
     BlockShape, ContactDetector, ContactSet, DetectionParams, NeighbourPair, NeighbourSearch,
     TrackList, detector_by_name,
 };
 use dda_geom::{Aabb, Motion};
-use std::time::Instant;
 
-/// A running simulation of a validated scene.
+/// A running simulation of a validated scene: what the model fixes, the saved state
+/// ([`RunState`], what a checkpoint holds) and the scratch of a step (`Scratch`,
+/// rebuilt, never saved).
 pub struct Simulation {
     pub(crate) model: Model,
     pub(crate) effects: Effects,
@@ -37,8 +39,6 @@ pub struct Simulation {
     pub(crate) detection: DetectionParams,
     pub(crate) options: RunOptions,
     pub(crate) nd: usize,
-    pub(crate) blocks: Vec<BlockState>,
-    pub(crate) shapes: Vec<BlockShape>,
     /// Free-block index of each block (None: fixed).
     pub(crate) free: Vec<Option<u32>>,
     /// Material of each block, packed: the joint lookups of every contact in every OCI
@@ -47,11 +47,18 @@ pub struct Simulation {
     /// Block index of each free block: the inverse of `free`.
     pub(crate) free_blocks: Vec<u32>,
     pub(crate) n_free: usize,
-    pub(crate) t: f64,
-    pub(crate) dt: f64,
-    pub(crate) totals: Totals,
-    pub(crate) contacts: ContactSet,
-    // Work buffers, reused from step to step.
+    /// Energy below the model's resolution, added to the guard's reference (see
+    /// `guard`): every free block lowered by d_tol, and a spring over the start overlap.
+    pub(crate) energy_floor: f64,
+    /// The state at the end of the last step: what a checkpoint saves.
+    pub(crate) state: RunState,
+    /// Work buffers of a step, reused from step to step, never saved.
+    pub(crate) scratch: Scratch,
+}
+
+/// The work buffers of a step: rebuilt from the state (or reused), never saved.
+pub(crate) struct Scratch {
+    pub(crate) shapes: Vec<BlockShape>,
     pub(crate) system: BlockSystem,
     pub(crate) prev: ContactSet,
     /// The candidates trajectory tracking may activate in this step.
@@ -64,8 +71,6 @@ pub struct Simulation {
     pub(crate) pattern_pairs: Vec<NeighbourPair>,
     pub(crate) aabbs: Vec<Aabb>,
     pub(crate) block_pairs: Vec<(u32, u32)>,
-    /// The system's pattern: the needed pairs when it was last set, widened.
-    pub(crate) pattern: Vec<(u32, u32)>,
     pub(crate) pair_entry: Vec<Option<Entry>>,
     /// Each block's half step, where the attempt's contact rows are linearised.
     pub(crate) half: Vec<HalfStep>,
@@ -94,13 +99,6 @@ pub struct Simulation {
     pub(crate) force_scale: Vec<f64>,
     /// Why the run stopped, once it has.
     pub(crate) diagnosis: Option<Diagnosis>,
-    /// The physics guard's energy balance (saved).
-    pub(crate) energy: EnergyBalance,
-    /// Energy below the model's resolution, added to the guard's reference (see
-    /// `guard`): every free block lowered by d_tol, and a spring over the start overlap.
-    pub(crate) energy_floor: f64,
-    /// Violations recorded so far (saved).
-    pub(crate) violations: Vec<Violation>,
     /// Each free block's gain of kinetic energy in the step (scratch of the guard).
     pub(crate) gains: Vec<(f64, usize)>,
 }
@@ -109,9 +107,9 @@ impl std::fmt::Debug for Simulation {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Simulation")
             .field("scene", &self.model.name)
-            .field("t", &self.t)
-            .field("dt", &self.dt)
-            .field("blocks", &self.blocks.len())
+            .field("t", &self.state.t)
+            .field("dt", &self.state.dt)
+            .field("blocks", &self.state.blocks.len())
             .finish()
     }
 }
@@ -208,73 +206,78 @@ impl Simulation {
                 initial += guard::strain(m.area, &b.stress, mat.young, mat.poisson);
             }
         }
+        let dt0 = p.dt0;
         Simulation {
-            dt: p.dt0,
             nd: effects.dofs_per_block(),
             model,
             effects,
             detector,
             detection,
             options,
-            blocks,
-            shapes,
             free_blocks: (0..free.len() as u32)
                 .filter(|&i| free[i as usize].is_some())
                 .collect(),
             material,
             free,
             n_free: n_free as usize,
-            t: 0.0,
-            totals: Totals::default(),
-            contacts: ContactSet::default(),
-            system,
-            prev: ContactSet::default(),
-            track_list: TrackList::new(),
-            neighbours: NeighbourSearch::with_skin(skin),
-            pairs: Vec::new(),
-            saved: Vec::new(),
-            pattern_pairs: Vec::new(),
-            aabbs: Vec::with_capacity(n),
-            block_pairs: Vec::new(),
-            pattern: Vec::new(),
-            pair_entry: Vec::new(),
-            half: Vec::with_capacity(n),
-            rows: Vec::new(),
-            springs: Vec::new(),
-            forces: Vec::new(),
-            factored_springs: Vec::new(),
-            factored_forces: Vec::new(),
-            changes: Vec::new(),
-            rhs_changes: Vec::new(),
-            factor_current: false,
-            base_k: Vec::new(),
-            base_f: Vec::new(),
-            mass: Vec::new(),
-            d: vec![[0.0; 6]; n],
-            motions: Vec::with_capacity(n),
-            flipped: Vec::new(),
-            force_scale: Vec::new(),
-            diagnosis: None,
-            energy: EnergyBalance {
-                supplied: initial,
-                supplied_max: initial,
-                worst_ratio: 0.0,
-            },
             energy_floor,
-            violations: Vec::new(),
-            gains: Vec::new(),
+            state: RunState {
+                t: 0.0,
+                dt: dt0,
+                totals: Totals::default(),
+                blocks,
+                contacts: ContactSet::default(),
+                pattern: Vec::new(),
+                energy: EnergyBalance {
+                    supplied: initial,
+                    supplied_max: initial,
+                    worst_ratio: 0.0,
+                },
+                violations: Vec::new(),
+            },
+            scratch: Scratch {
+                shapes,
+                system,
+                prev: ContactSet::default(),
+                track_list: TrackList::new(),
+                neighbours: NeighbourSearch::with_skin(skin),
+                pairs: Vec::new(),
+                saved: Vec::new(),
+                pattern_pairs: Vec::new(),
+                aabbs: Vec::with_capacity(n),
+                block_pairs: Vec::new(),
+                pair_entry: Vec::new(),
+                half: Vec::with_capacity(n),
+                rows: Vec::new(),
+                springs: Vec::new(),
+                forces: Vec::new(),
+                factored_springs: Vec::new(),
+                factored_forces: Vec::new(),
+                changes: Vec::new(),
+                rhs_changes: Vec::new(),
+                factor_current: false,
+                base_k: Vec::new(),
+                base_f: Vec::new(),
+                mass: Vec::new(),
+                d: vec![[0.0; 6]; n],
+                motions: Vec::with_capacity(n),
+                flipped: Vec::new(),
+                force_scale: Vec::new(),
+                diagnosis: None,
+                gains: Vec::new(),
+            },
         }
     }
 
     /// Violations of physics recorded so far by a run that goes on through them
     /// ([`crate::RunOptions::stop_on_violation`] off).
     pub fn violations(&self) -> &[Violation] {
-        &self.violations
+        &self.state.violations
     }
 
     /// The physics guard's energy balance so far.
     pub fn energy_balance(&self) -> &EnergyBalance {
-        &self.energy
+        &self.state.energy
     }
 
     /// The validated scene.
@@ -294,32 +297,32 @@ impl Simulation {
 
     /// Simulated time, s.
     pub fn time(&self) -> f64 {
-        self.t
+        self.state.t
     }
 
     /// The current (controlled) step size, s.
     pub fn time_step(&self) -> f64 {
-        self.dt
+        self.state.dt
     }
 
     /// Whether the run has reached its duration.
     pub fn finished(&self) -> bool {
-        self.t >= self.model.params.duration
+        self.state.t >= self.model.params.duration
     }
 
     /// The blocks' states.
     pub fn blocks(&self) -> &[BlockState] {
-        &self.blocks
+        &self.state.blocks
     }
 
     /// The contacts at the end of the last step.
     pub fn contacts(&self) -> &ContactSet {
-        &self.contacts
+        &self.state.contacts
     }
 
     /// Counters so far.
     pub fn totals(&self) -> &Totals {
-        &self.totals
+        &self.state.totals
     }
 
     /// Unknowns of the global system.
@@ -327,19 +330,14 @@ impl Simulation {
         self.n_free * self.nd
     }
 
-    /// Number of symbolic factorisations, numeric factorisations and low-rank solves so
-    /// far.
-    pub fn factorisations(&self) -> (u64, u64, u64) {
-        (
-            self.system.symbolic_count,
-            self.system.numeric_count,
-            self.system.low_rank_count,
-        )
+    /// The solver's work so far: factorisations and low-rank solves.
+    pub fn solver_counters(&self) -> SolverCounters {
+        self.scratch.system.counters()
     }
 
     /// Why the run stopped, once a step has failed: the blocks and contacts involved.
     pub fn diagnosis(&self) -> Option<&Diagnosis> {
-        self.diagnosis.as_ref()
+        self.scratch.diagnosis.as_ref()
     }
 
     /// Runs to the scene's duration, calling `on_step` after every step.
@@ -358,7 +356,7 @@ impl Simulation {
     /// error the state stays at the last completed step and [`Simulation::diagnosis`]
     /// says what was involved.
     pub fn step(&mut self) -> Result<StepRecord, SimError> {
-        let mut last_dt = self.dt;
+        let mut last_dt = self.state.dt;
         let mut worst = None;
         let result = self.try_step(&mut last_dt, &mut worst);
         if let Err(e) = &result {
@@ -374,24 +372,23 @@ impl Simulation {
         last_dt: &mut f64,
         worst: &mut Option<usize>,
     ) -> Result<StepRecord, SimError> {
-        let started = Instant::now();
+        let started = Stopwatch::start();
         let mut rec = StepRecord::default();
-        let t_det = Instant::now();
+        let mut watch = Stopwatch::start();
         self.detect_step_start();
-        rec.detection_s += t_det.elapsed().as_secs_f64();
-        rec.candidates = self.contacts.len();
+        watch.lap(&mut rec, Phase::Detection);
+        rec.candidates = self.state.contacts.len();
 
-        let t_pat = Instant::now();
         self.set_pattern()?;
-        rec.assembly_s += t_pat.elapsed().as_secs_f64();
-        self.saved.clone_from(&self.contacts.contacts);
+        watch.lap(&mut rec, Phase::Assembly);
+        self.scratch.saved.clone_from(&self.state.contacts.contacts);
         let p = &self.model.params;
         let (duration, d_max, theta_max, max_oci, dt0) =
             (p.duration, p.d_max, p.theta_max, p.max_oci, p.dt0);
-        let remaining = duration - self.t;
+        let remaining = duration - self.state.t;
         // The step respects the motion it starts with: no block's current velocity may
         // carry a vertex beyond d_max, or turn it beyond theta_max, within it.
-        let planned = self.dt.min(self.velocity_room());
+        let planned = self.state.dt.min(self.velocity_room());
         // Land on `duration`; a remainder within 1e-6 of a step is taken with it rather
         // than left as a sliver step.
         let landing = planned * (1.0 + 1e-6) >= remaining;
@@ -400,19 +397,19 @@ impl Simulation {
         let mut first_attempt = true;
         loop {
             *last_dt = dt;
-            let t_asm = Instant::now();
+            let mut watch = Stopwatch::start();
             self.linearise(dt);
             self.base_terms(dt);
             self.set_force_scale();
-            rec.assembly_s += t_asm.elapsed().as_secs_f64();
+            watch.lap(&mut rec, Phase::Assembly);
             if first_attempt {
                 self.predict_states(&mut rec);
                 first_attempt = false;
             }
             // The first OCI iteration of every attempt factorises its own matrix.
-            self.factor_current = false;
+            self.scratch.factor_current = false;
             let (converged, iterations) = self.open_close_iteration(&mut rec)?;
-            self.totals.oci_iterations += iterations as u64;
+            self.state.totals.oci_iterations += iterations as u64;
             let reason;
             if converged {
                 let (disp, rot, moved_most) = self.largest_motion();
@@ -422,9 +419,9 @@ impl Simulation {
                     let growth = step_growth(iterations, max_oci, disp, rot, d_max, theta_max);
                     self.accept(dt, &mut rec)?;
                     if landing {
-                        self.t = duration;
+                        self.state.t = duration;
                     } else {
-                        self.dt = (dt * growth).min(dt0);
+                        self.state.dt = (dt * growth).min(dt0);
                     }
                     break;
                 }
@@ -436,27 +433,31 @@ impl Simulation {
                 reason = "open-close iteration did not converge";
             }
             rec.cuts += 1;
-            self.totals.cuts += 1;
-            self.contacts.contacts.copy_from_slice(&self.saved);
+            self.state.totals.cuts += 1;
+            self.state
+                .contacts
+                .contacts
+                .copy_from_slice(&self.scratch.saved);
             if dt < DT_FLOOR * dt0 {
                 return Err(SimError::TimeStepCollapsed {
-                    t: self.t,
+                    t: self.state.t,
                     dt,
                     reason: reason.to_string(),
                 });
             }
         }
-        self.totals.steps += 1;
-        rec.step = self.totals.steps;
-        rec.t = self.t;
-        rec.active_contacts = self.contacts.active().count();
-        rec.closed_contacts = self.contacts.closed_count();
+        self.state.totals.steps += 1;
+        rec.step = self.state.totals.steps;
+        rec.t = self.state.t;
+        rec.active_contacts = self.state.contacts.active().count();
+        rec.closed_contacts = self.state.contacts.closed_count();
         rec.kinetic_energy = self.kinetic_energy();
-        self.totals.max_penetration = self.totals.max_penetration.max(rec.max_penetration);
-        self.totals.detection_s += rec.detection_s;
-        self.totals.assembly_s += rec.assembly_s;
-        self.totals.solve_s += rec.solve_s;
-        self.totals.total_s += started.elapsed().as_secs_f64();
+        self.state.totals.max_penetration =
+            self.state.totals.max_penetration.max(rec.max_penetration);
+        self.state.totals.detection_s += rec.detection_s;
+        self.state.totals.assembly_s += rec.assembly_s;
+        self.state.totals.solve_s += rec.solve_s;
+        self.state.totals.total_s += started.seconds();
         Ok(rec)
     }
 }

@@ -6,6 +6,7 @@ use crate::guard::{EnergyBalance, Violation};
 use crate::kinematics::Vec6;
 use crate::scene::Model;
 use crate::simulation::{RunOptions, Simulation};
+use crate::solver::SolverCounters;
 use dda_contact::{BlockShape, ContactSet};
 use dda_geom::{ConvexPolygon, DVec2};
 use serde::{Deserialize, Serialize};
@@ -71,7 +72,9 @@ pub struct Totals {
 /// A block's state.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BlockState {
-    /// Current polygon.
+    /// Current polygon; saved as its vertices and restored bit for bit
+    /// ([`ConvexPolygon::restore`]).
+    #[serde(with = "saved_polygon")]
     pub polygon: ConvexPolygon,
     /// Velocity (rates of u0, v0, r0, ex, ey, gxy).
     pub velocity: Vec6,
@@ -85,28 +88,10 @@ pub struct BlockState {
     pub fixed_points: Vec<(DVec2, DVec2)>,
 }
 
-/// A block's state in a [`Snapshot`]: its polygon as a plain vertex list (restored bit
-/// for bit, see [`ConvexPolygon::restore`]).
+/// The state of a run at the end of a step: everything the next step reads that is not
+/// rebuilt from it. Saved whole by a checkpoint (with the solver's, see [`Snapshot`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct BlockSnapshot {
-    /// Vertices, counter-clockwise.
-    pub vertices: Vec<DVec2>,
-    /// Velocity (rates of u0, v0, r0, ex, ey, gxy).
-    pub velocity: Vec6,
-    /// Stress (sx, sy, txy), Pa.
-    pub stress: [f64; 3],
-    /// Accumulated rotation, rad.
-    pub rotation: f64,
-    /// Point loads: current point, force.
-    pub loads: Vec<(DVec2, DVec2)>,
-    /// Fixed points: current material point, its fixed place.
-    pub fixed_points: Vec<(DVec2, DVec2)>,
-}
-
-/// Everything a run needs to go on from the end of a step exactly as it would have
-/// ([`Simulation::snapshot`], [`Simulation::restore`]).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Snapshot {
+pub struct RunState {
     /// Simulated time, s.
     pub t: f64,
     /// The controlled step size, s.
@@ -114,51 +99,55 @@ pub struct Snapshot {
     /// Counters so far (timing included).
     pub totals: Totals,
     /// The blocks.
-    pub blocks: Vec<BlockSnapshot>,
-    /// The contacts at the end of the last step, with their states.
+    pub blocks: Vec<BlockState>,
+    /// The contacts at the end of the last step, with their states (inherited by the
+    /// next step).
     pub contacts: ContactSet,
     /// The sticky block pattern of the global matrix (free-block index pairs).
     pub pattern: Vec<(u32, u32)>,
-    /// The matrix of the last factorisation, whose factor predicts the next step.
-    pub factored_values: Option<Vec<f64>>,
-    /// Symbolic factorisations, numeric factorisations and low-rank solves so far.
-    pub counters: [u64; 3],
     /// The physics guard's energy balance.
     pub energy: EnergyBalance,
     /// Violations recorded by a run that goes on through them.
     pub violations: Vec<Violation>,
 }
 
+/// Everything a run needs to go on from the end of a step exactly as it would have
+/// ([`Simulation::snapshot`], [`Simulation::restore`]): the run's state, and the matrix
+/// of the last factorisation (the next step's state predictor solves with its factor)
+/// with the solver's counters.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Snapshot {
+    /// The run's state.
+    pub state: RunState,
+    /// The matrix of the last factorisation, whose factor predicts the next step.
+    pub factored_values: Option<Vec<f64>>,
+    /// The solver's work so far.
+    pub counters: SolverCounters,
+}
+
+/// A polygon saved as its vertices and restored bit for bit: a run's polygons are affine
+/// images of validated ones, which tolerance-based validation could repair.
+mod saved_polygon {
+    use dda_geom::{ConvexPolygon, DVec2};
+    use serde::{Deserialize, Deserializer, Serialize, Serializer, de::Error};
+
+    pub fn serialize<S: Serializer>(p: &ConvexPolygon, s: S) -> Result<S::Ok, S::Error> {
+        p.vertices().serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<ConvexPolygon, D::Error> {
+        ConvexPolygon::restore(Vec::<DVec2>::deserialize(d)?).map_err(D::Error::custom)
+    }
+}
+
 impl Simulation {
-    /// The state a resumed run needs to go on exactly as this one would: blocks, time,
-    /// step size, counters, the contacts with their states (inherited by the next step),
-    /// the sticky matrix pattern and the matrix of the last factorisation (the next
-    /// step's state predictor solves with its factor). Everything else is rebuilt at the
-    /// start of every step.
+    /// The state a resumed run needs to go on exactly as this one would (see
+    /// [`Snapshot`]). Everything else is rebuilt at the start of every step.
     pub fn snapshot(&self) -> Snapshot {
-        let (symbolic, numeric, low_rank) = self.factorisations();
         Snapshot {
-            t: self.t,
-            dt: self.dt,
-            totals: self.totals,
-            blocks: self
-                .blocks
-                .iter()
-                .map(|b| BlockSnapshot {
-                    vertices: b.polygon.vertices().to_vec(),
-                    velocity: b.velocity,
-                    stress: b.stress,
-                    rotation: b.rotation,
-                    loads: b.loads.clone(),
-                    fixed_points: b.fixed_points.clone(),
-                })
-                .collect(),
-            contacts: self.contacts.clone(),
-            pattern: self.pattern.clone(),
-            factored_values: self.system.factored_values().map(|v| v.to_vec()),
-            counters: [symbolic, numeric, low_rank],
-            energy: self.energy,
-            violations: self.violations.clone(),
+            state: self.state.clone(),
+            factored_values: self.scratch.system.factored_values().map(|v| v.to_vec()),
+            counters: self.solver_counters(),
         }
     }
 
@@ -167,7 +156,12 @@ impl Simulation {
     /// when the snapshot is not of this model.
     pub fn restore(model: Model, options: RunOptions, snap: Snapshot) -> Result<Self, String> {
         let mut sim = Simulation::new(model, options);
-        let n = sim.blocks.len();
+        let Snapshot {
+            state: snap,
+            factored_values,
+            counters,
+        } = snap;
+        let n = sim.state.blocks.len();
         if snap.blocks.len() != n {
             return Err(format!(
                 "the checkpoint has {} blocks, the scene {n}",
@@ -177,34 +171,23 @@ impl Simulation {
         if !(snap.t.is_finite() && snap.dt.is_finite() && snap.dt > 0.0) {
             return Err(format!("invalid time {} or step {}", snap.t, snap.dt));
         }
-        for (i, b) in snap.blocks.into_iter().enumerate() {
-            let id = &sim.model.blocks[i].id;
-            let polygon =
-                ConvexPolygon::restore(b.vertices).map_err(|e| format!("block `{id}`: {e}"))?;
-            let state = &mut sim.blocks[i];
-            if polygon.len() != state.polygon.len()
-                || b.loads.len() != state.loads.len()
-                || b.fixed_points.len() != state.fixed_points.len()
+        for (i, (b, start)) in snap.blocks.iter().zip(&sim.state.blocks).enumerate() {
+            if b.polygon.len() != start.polygon.len()
+                || b.loads.len() != start.loads.len()
+                || b.fixed_points.len() != start.fixed_points.len()
             {
+                let id = &sim.model.blocks[i].id;
                 return Err(format!("block `{id}` does not match the scene's"));
             }
-            sim.shapes[i] = BlockShape::new(&polygon);
-            *state = BlockState {
-                polygon,
-                velocity: b.velocity,
-                stress: b.stress,
-                rotation: b.rotation,
-                loads: b.loads,
-                fixed_points: b.fixed_points,
-            };
         }
+        let blocks = &snap.blocks;
         let fits = |k: &dda_contact::ContactKey| {
             let (v, e) = (k.vertex_block as usize, k.edge_block as usize);
             v < n
                 && e < n
                 && v != e
-                && (k.vertex as usize) < sim.blocks[v].polygon.len()
-                && (k.edge as usize) < sim.blocks[e].polygon.len()
+                && (k.vertex as usize) < blocks[v].polygon.len()
+                && (k.edge as usize) < blocks[e].polygon.len()
         };
         let c = &snap.contacts;
         let ranges_fit = c.pairs.iter().all(|p| {
@@ -223,26 +206,24 @@ impl Simulation {
         {
             return Err("its matrix pattern does not fit the scene's blocks".into());
         }
-        sim.t = snap.t;
-        sim.dt = snap.dt;
-        sim.totals = snap.totals;
-        sim.contacts = snap.contacts;
-        sim.pattern = snap.pattern;
-        sim.energy = snap.energy;
-        sim.violations = snap.violations;
-        if sim.totals.steps > 0 {
+        for (shape, b) in sim.scratch.shapes.iter_mut().zip(&snap.blocks) {
+            *shape = BlockShape::new(&b.polygon);
+        }
+        sim.state = snap;
+        if sim.state.totals.steps > 0 {
             // The system holds the pattern of the last step (set at every step).
-            sim.system
-                .set_pattern(sim.n_free, sim.nd, &sim.pattern)
+            sim.scratch
+                .system
+                .set_pattern(sim.n_free, sim.nd, &sim.state.pattern)
                 .map_err(|e| format!("its matrix pattern: {e}"))?;
-            if let Some(values) = &snap.factored_values {
-                sim.system
+            if let Some(values) = &factored_values {
+                sim.scratch
+                    .system
                     .restore_factor(values)
                     .map_err(|e| format!("its saved matrix: {e}"))?;
             }
         }
-        let [s, nn, l] = snap.counters;
-        sim.system.set_counters(s, nn, l);
+        sim.scratch.system.set_counters(counters);
         Ok(sim)
     }
 }

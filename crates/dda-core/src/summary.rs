@@ -89,7 +89,7 @@ impl Summary {
     /// The summary of `sim` as it stands; `error` if the run stopped early.
     pub fn of(sim: &Simulation, error: Option<String>) -> Self {
         let t = sim.totals();
-        let (sym, num, low_rank) = sim.factorisations();
+        let counters = sim.solver_counters();
         let p = &sim.model().params;
         Summary {
             scene: sim.model().name.clone(),
@@ -116,9 +116,9 @@ impl Summary {
             max_displacement: p.d_max,
             unknowns: sim.unknowns(),
             shear_springs: t.shear_springs,
-            symbolic_factorisations: sym,
-            numeric_factorisations: num,
-            low_rank_solves: low_rank,
+            symbolic_factorisations: counters.symbolic,
+            numeric_factorisations: counters.numeric,
+            low_rank_solves: counters.low_rank,
             seconds: Seconds {
                 total: t.total_s,
                 contact_detection: t.detection_s,

@@ -69,11 +69,11 @@ impl Simulation {
     pub(crate) fn velocity_room(&self) -> f64 {
         let p = &self.model.params;
         let (mut speed, mut spin) = (0.0f64, 0.0f64);
-        for (i, s) in self.shapes.iter().enumerate() {
+        for (i, s) in self.scratch.shapes.iter().enumerate() {
             if self.free[i].is_none() {
                 continue;
             }
-            let v = &self.blocks[i].velocity;
+            let v = &self.state.blocks[i].velocity;
             spin = spin.max(v[2].abs());
             for &x in &s.vertices {
                 speed = speed.max(point_displacement(x, s.centroid, v).length());
@@ -88,11 +88,11 @@ impl Simulation {
         let (mut disp, mut rot) = (0.0f64, 0.0f64);
         let (mut worst, mut worst_ratio) = (None, 0.0);
         let p = &self.model.params;
-        for (i, s) in self.shapes.iter().enumerate() {
+        for (i, s) in self.scratch.shapes.iter().enumerate() {
             if self.free[i].is_none() {
                 continue;
             }
-            let d = &self.d[i];
+            let d = &self.scratch.d[i];
             rot = rot.max(d[2].abs());
             let mut block_disp = 0.0f64;
             for &v in &s.vertices {

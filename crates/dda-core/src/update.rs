@@ -14,9 +14,9 @@ impl Simulation {
     /// records penetration.
     pub(crate) fn accept(&mut self, dt: f64, rec: &mut StepRecord) -> Result<(), SimError> {
         let (mut max_pen, mut deepest) = (0.0f64, None);
-        for (k, c) in self.contacts.contacts.iter().enumerate() {
+        for (k, c) in self.state.contacts.contacts.iter().enumerate() {
             if c.active && c.state.is_closed() {
-                let pen = -self.rows[k].eval(&self.d);
+                let pen = -self.scratch.rows[k].eval(&self.scratch.d);
                 if pen > max_pen {
                     (max_pen, deepest) = (pen, Some(k));
                 }
@@ -26,24 +26,24 @@ impl Simulation {
         rec.max_penetration = max_pen;
         rec.dt = dt;
         // Check every block's motion first, so that a failure leaves the state untouched.
-        let (t, model) = (self.t, &self.model);
+        let (t, model) = (self.state.t, &self.model);
         let inverted = |i: usize| SimError::Inverted {
             t,
             block: model.blocks[i].id.clone(),
         };
-        for i in 0..self.blocks.len() {
-            if self.free[i].is_some() && check_displacement(&self.d[i]).is_err() {
+        for i in 0..self.state.blocks.len() {
+            if self.free[i].is_some() && check_displacement(&self.scratch.d[i]).is_err() {
                 return Err(inverted(i));
             }
         }
         let dynamic = model.params.mode == Mode::Dynamic;
-        for i in 0..self.blocks.len() {
+        for i in 0..self.state.blocks.len() {
             if self.free[i].is_none() {
                 continue;
             }
-            let d = self.d[i];
-            let c = self.shapes[i].centroid;
-            let b = &mut self.blocks[i];
+            let d = self.scratch.d[i];
+            let c = self.scratch.shapes[i].centroid;
+            let b = &mut self.state.blocks[i];
             // Cannot fail: every motion was checked above.
             b.polygon.displace(c, &d).map_err(|_| inverted(i))?;
             for v in 0..6 {
@@ -67,16 +67,16 @@ impl Simulation {
             for (now, _) in b.fixed_points.iter_mut() {
                 *now = displace_point(*now, c, &d);
             }
-            self.shapes[i].set(&b.polygon);
+            self.scratch.shapes[i].set(&b.polygon);
         }
-        self.t += dt;
+        self.state.t += dt;
         Ok(())
     }
 
     /// Kinetic energy of the free blocks, 1/2 V^T M V.
     pub fn kinetic_energy(&self) -> f64 {
         let mut e = 0.0;
-        for (i, b) in self.blocks.iter().enumerate() {
+        for (i, b) in self.state.blocks.iter().enumerate() {
             if self.free[i].is_none() {
                 continue;
             }

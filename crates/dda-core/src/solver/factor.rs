@@ -37,9 +37,9 @@ impl BlockSystem {
         }
         self.values.copy_from_slice(values);
         self.rhs.fill(0.0);
-        let count = self.numeric_count;
+        let count = self.counters.numeric;
         self.solve()?;
-        self.numeric_count = count;
+        self.counters.numeric = count;
         Ok(())
     }
 
@@ -71,7 +71,7 @@ impl BlockSystem {
                 Default::default(),
             )
             .map_err(|_| SolveError::NotPositiveDefinite)?;
-        self.numeric_count += 1;
+        self.counters.numeric += 1;
         self.factored = true;
         self.z_rows.clear();
         self.paths.clear();

@@ -131,7 +131,7 @@ impl BlockSystem {
         }
         factor.backward(&mut self.rhs, &mut g);
         self.gather = g;
-        self.low_rank_count += 1;
+        self.counters.low_rank += 1;
         true
     }
 }
@@ -302,7 +302,7 @@ mod tests {
                 assert!(res.abs() < 1e-12, "row {r}: residual {res}");
             }
         }
-        assert_eq!(sys.low_rank_count, 2);
+        assert_eq!(sys.counters().low_rank, 2);
         // A change of the matrix drops the factor: the low-rank path declines.
         sys.add_diagonal(0, &[[1.0; 6]; 6]);
         assert!(!sys.solve_low_rank(&[spring], &[]));

@@ -77,6 +77,17 @@ fn bytes(n: u64) -> String {
     }
 }
 
+/// The solver's work: factorisations and low-rank solves.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct SolverCounters {
+    /// Symbolic factorisations (new matrix patterns).
+    pub symbolic: u64,
+    /// Numeric factorisations.
+    pub numeric: u64,
+    /// Solves through a low-rank update of the factor.
+    pub low_rank: u64,
+}
+
 /// Where the block pair (i, j) lives in the storage: an index into the block entries.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Entry(u32);
@@ -137,12 +148,8 @@ pub struct BlockSystem {
     /// The capacitance matrix (row-major) and its right-hand side, then solution.
     pub(super) cap: Vec<f64>,
     pub(super) cap_rhs: Vec<f64>,
-    /// Number of symbolic factorisations done.
-    pub symbolic_count: u64,
-    /// Number of numeric factorisations done.
-    pub numeric_count: u64,
-    /// Number of solves through a low-rank update of the factor.
-    pub low_rank_count: u64,
+    /// The work done so far.
+    counters: SolverCounters,
     /// Most bytes the factor and its workspace may take (None: no bound but the
     /// allocator's).
     pub memory_limit: Option<u64>,
@@ -189,9 +196,7 @@ impl Default for BlockSystem {
             term_col: Vec::new(),
             cap: Vec::new(),
             cap_rhs: Vec::new(),
-            symbolic_count: 0,
-            numeric_count: 0,
-            low_rank_count: 0,
+            counters: SolverCounters::default(),
             memory_limit: None,
         }
     }
@@ -326,7 +331,7 @@ impl BlockSystem {
         self.gather = Vec::with_capacity(Factor::new(sn, &self.l_values).max_rows());
         self.mem = MemBuffer::try_new(req).map_err(|_| fail())?;
         self.symbolic = Some(symbolic);
-        self.symbolic_count += 1;
+        self.counters.symbolic += 1;
         Ok(true)
     }
 
@@ -381,11 +386,14 @@ impl BlockSystem {
         self.rhs.fill(0.0);
     }
 
-    /// Sets the symbolic, numeric and low-rank counters (to resume a run's totals).
-    pub fn set_counters(&mut self, symbolic: u64, numeric: u64, low_rank: u64) {
-        self.symbolic_count = symbolic;
-        self.numeric_count = numeric;
-        self.low_rank_count = low_rank;
+    /// The work done so far.
+    pub fn counters(&self) -> SolverCounters {
+        self.counters
+    }
+
+    /// Sets the counters (to resume a run's totals).
+    pub fn set_counters(&mut self, counters: SolverCounters) {
+        self.counters = counters;
     }
 
     /// The entry coupling blocks `i` and `j` (either order), if the pattern has it.
