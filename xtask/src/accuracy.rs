@@ -9,7 +9,7 @@
 //! - The 93- and 826-block columns (cover, r_tol 1): the largest penetration over d_tol,
 //!   and the change of mechanical energy, against time.
 //!
-//! Writes `docs/accuracy.md` and `docs/accuracy/*.svg` (or under `--out DIR`).
+//! Writes `docs/accuracy.md` and `docs/results/accuracy/*.svg` (or under `--out DIR`).
 
 use dda::bench::analytic::{self, Rebound};
 use dda::bench::{PAPER_COLUMNS, mechanical_energy};
@@ -113,7 +113,7 @@ fn run_case(case: &Case, varied: &'static str, value: f64) -> Run {
 
 /// Runs the study and writes the document and its plots under `out`.
 pub fn run(out: &Path) -> Result<(), String> {
-    let pictures = out.join("accuracy");
+    let pictures = out.join("results").join("accuracy");
     std::fs::create_dir_all(&pictures).map_err(|e| format!("{}: {e}", pictures.display()))?;
     let mut doc = String::from(
         "# Accuracy against time\n\n\
@@ -176,7 +176,7 @@ pub fn run(out: &Path) -> Result<(), String> {
             true,
         );
         std::fs::write(pictures.join(&file), svg).map_err(|e| format!("{file}: {e}"))?;
-        let _ = writeln!(doc, "\n![{name}](accuracy/{file})\n");
+        let _ = writeln!(doc, "\n![{name}](results/accuracy/{file})\n");
     }
 
     doc.push_str(
@@ -276,7 +276,7 @@ pub fn run(out: &Path) -> Result<(), String> {
         for what in ["penetration", "energy"] {
             let _ = writeln!(
                 doc,
-                "![{blocks} {what}](accuracy/column-{blocks}-{what}.svg)"
+                "![{blocks} {what}](results/accuracy/column-{blocks}-{what}.svg)"
             );
         }
     }

@@ -30,7 +30,7 @@ fn paper_says(case: &str, detector: &str) -> bool {
 /// Runs the cases and writes `docs/robustness.md` and its pictures under `root`.
 pub fn run(root: &Path) -> Result<(), String> {
     let docs = root.join("docs");
-    let pictures = docs.join("robustness");
+    let pictures = docs.join("results").join("robustness");
     std::fs::create_dir_all(&pictures).map_err(|e| format!("{}: {e}", pictures.display()))?;
     let mut rows = String::new();
     let (mut agree, mut total) = (0, 0);
@@ -77,7 +77,7 @@ pub fn run(root: &Path) -> Result<(), String> {
             };
             let _ = writeln!(
                 rows,
-                "| {} | {paper_name} | {} | {} | {} | {:.3} | ({:.3}, {:.3}) | {} | [picture](robustness/{file}) |",
+                "| {} | {paper_name} | {} | {} | {} | {:.3} | ({:.3}, {:.3}) | {} | [picture](results/robustness/{file}) |",
                 case.case,
                 word(paper),
                 word(o.permissible),

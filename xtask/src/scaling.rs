@@ -2,7 +2,7 @@
 //! joint layout of paper 5.2b over a region `s` times as wide and as tall (about
 //! 826 s^2 blocks of the same sizes, Table 3's 5.2b parameters), run with the cover
 //! detector at r_tol 1 for a short simulated time. Writes `docs/scaling.md` and
-//! `docs/scaling.svg` (or under `--out DIR`); the readings written by hand under the
+//! `docs/results/scaling.svg` (or under `--out DIR`); the readings written by hand under the
 //! table of an existing `scaling.md` (its `## ` sections) are kept.
 //!
 //! With `--write-scenes DIR` it runs nothing and writes each column as a scene file
@@ -214,8 +214,10 @@ pub fn run(o: &Options) -> Result<(), String> {
         true,
         true,
     );
-    std::fs::write(o.out.join("scaling.svg"), svg).map_err(|e| format!("scaling.svg: {e}"))?;
-    doc.push_str("\n![time per step](scaling.svg)\n");
+    let results = o.out.join("results");
+    std::fs::create_dir_all(&results).map_err(|e| format!("{}: {e}", results.display()))?;
+    std::fs::write(results.join("scaling.svg"), svg).map_err(|e| format!("scaling.svg: {e}"))?;
+    doc.push_str("\n![time per step](results/scaling.svg)\n");
     let path = o.out.join("scaling.md");
     // The readings written by hand under the table (its `## ` sections) are kept.
     if let Ok(old) = std::fs::read_to_string(&path) {
