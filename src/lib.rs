@@ -8,11 +8,10 @@
 //! - [`core`]: scenes, effects, the implicit DDA engine.
 //! - [`bench`](mod@bench): scene generators and the built-in scenes.
 //!
-//! It also holds what the `dda` command writes ([`report`]).
-
-pub mod report;
+//! - [`report`]: what a run writes for people (frames, plots, report.html).
 
 pub use dda_bench as bench;
 pub use dda_contact as contact;
 pub use dda_core as core;
 pub use dda_geom as geom;
+pub use dda_report as report;

@@ -11,10 +11,10 @@
 //!
 //! Writes `docs/accuracy.md` and `docs/results/accuracy/*.svg` (or under `--out DIR`).
 
-use dda::bench::analytic::{self, Rebound};
-use dda::bench::{PAPER_COLUMNS, mechanical_energy};
-use dda::core::{RunOptions, Scene, Simulation};
-use dda::report::plot;
+use dda_bench::analytic::{self, Rebound};
+use dda_bench::{PAPER_COLUMNS, mechanical_energy};
+use dda_core::{RunOptions, Scene, Simulation};
+use dda_report::plot;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -43,7 +43,7 @@ struct Run {
 type Case = (
     &'static str,
     f64,
-    fn(dda::core::scene::Analysis) -> Scene,
+    fn(dda_core::scene::Analysis) -> Scene,
     &'static str,
 );
 

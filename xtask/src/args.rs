@@ -1,55 +1,63 @@
-//! Command-line pieces the tasks share: `--flag value` pairs, and the values that recur
-//! (counts, the paper's column sizes), each error naming its flag.
+//! Values the tasks' options share (counts, the paper's column sizes, positive numbers,
+//! detector names), as clap value parsers whose errors name the value.
 
-use dda::bench::PAPER_COLUMNS;
+use dda_bench::PAPER_COLUMNS;
 
-/// The `(flag, value)` pairs of `args`, in order; an error names a flag without a value.
-pub fn pairs(args: &[String]) -> Result<Vec<(&str, &str)>, String> {
-    let mut out = Vec::with_capacity(args.len() / 2);
-    let mut it = args.iter();
-    while let Some(flag) = it.next() {
-        let value = it.next().ok_or_else(|| format!("`{flag}` needs a value"))?;
-        out.push((flag.as_str(), value.as_str()));
-    }
-    Ok(out)
-}
-
-/// `value` as a count above zero.
-pub fn positive_count(flag: &str, value: &str) -> Result<u64, String> {
+/// A count above zero.
+pub fn positive_count(value: &str) -> Result<u64, String> {
     value
+        .trim()
         .parse()
         .ok()
         .filter(|&n| n > 0)
-        .ok_or_else(|| format!("{flag}: `{value}` is not a positive count"))
+        .ok_or_else(|| format!("`{value}` is not a positive count"))
 }
 
-/// `value` as the block count of one of the paper's columns (20, 93, 229, 826).
-pub fn paper_column(flag: &str, value: &str) -> Result<usize, String> {
+/// A count above zero, as a size.
+pub fn positive_size(value: &str) -> Result<usize, String> {
+    positive_count(value).map(|n| n as usize)
+}
+
+/// A finite number above zero.
+pub fn positive_number(value: &str) -> Result<f64, String> {
+    value
+        .trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|x| x.is_finite() && *x > 0.0)
+        .ok_or_else(|| format!("`{value}` is not a positive number"))
+}
+
+/// The block count of one of the paper's columns (20, 93, 229, 826).
+pub fn paper_column(value: &str) -> Result<usize, String> {
     value
         .trim()
         .parse()
         .ok()
         .filter(|m| PAPER_COLUMNS.iter().any(|c| c.blocks == *m))
         .ok_or_else(|| {
-            format!("{flag}: `{value}` is not the block count of a paper column (20, 93, 229, 826)")
+            format!("`{value}` is not the block count of a paper column (20, 93, 229, 826)")
         })
+}
+
+/// The name of a built-in detector.
+pub fn detector(value: &str) -> Result<String, String> {
+    dda_contact::detector_by_name(value.trim())
+        .map(|_| value.trim().to_string())
+        .map_err(|e| e.to_string())
 }
 
 #[cfg(test)]
 mod tests {
-    use super::{pairs, paper_column, positive_count};
+    use super::{detector, paper_column, positive_count, positive_number};
 
     #[test]
-    fn errors_name_the_flag_and_the_value() {
-        let args: Vec<String> = ["--runs", "3", "--out"]
-            .iter()
-            .map(|s| s.to_string())
-            .collect();
-        assert_eq!(pairs(&args[..2]), Ok(vec![("--runs", "3")]));
-        assert_eq!(pairs(&args), Err("`--out` needs a value".into()));
-        assert_eq!(positive_count("--jobs", "2"), Ok(2));
-        assert!(positive_count("--jobs", "0").is_err_and(|e| e.contains("--jobs: `0`")));
-        assert_eq!(paper_column("--model", "826"), Ok(826));
-        assert!(paper_column("--model", "7").is_err_and(|e| e.contains("--model: `7`")));
+    fn errors_name_the_value() {
+        assert_eq!(positive_count("2"), Ok(2));
+        assert!(positive_count("0").is_err_and(|e| e.contains("`0`")));
+        assert_eq!(paper_column("826"), Ok(826));
+        assert!(paper_column("7").is_err_and(|e| e.contains("`7`")));
+        assert!(positive_number("-1").is_err_and(|e| e.contains("`-1`")));
+        assert!(detector("nope").is_err_and(|e| e.contains("nope")));
     }
 }

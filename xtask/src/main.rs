@@ -17,6 +17,7 @@ mod scaling;
 mod sweep;
 mod target;
 
+use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -26,83 +27,54 @@ fn root() -> PathBuf {
     here.parent().map(PathBuf::from).unwrap_or(here)
 }
 
+/// Project automation for dda-rs: the studies behind `docs/`.
+#[derive(Debug, Parser)]
+#[command(name = "cargo xtask")]
+struct Cli {
+    #[command(subcommand)]
+    task: Task,
+}
+
+#[derive(Debug, Subcommand)]
+enum Task {
+    /// The paper's section 4 cases x detectors, judged and drawn -> docs/robustness.md.
+    Robustness,
+    /// Time per step against blocks -> docs/scaling.md (or the columns as scene files).
+    Scaling(scaling::Options),
+    /// Error against wall time; the columns' penetration and energy -> docs/accuracy.md.
+    Accuracy {
+        /// Output folder (default: docs/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// The paper's section 5 columns over detectors and r_tol.
+    Sweep(sweep::Options),
+    /// The 826-block column's speed over perturbed trajectories (medians, ms per OCI
+    /// iteration; with --repeat R each trajectory's fastest of R runs).
+    Target(target::Options),
+}
+
+/// Bad options exit 2 (clap's own exit); a study that cannot be made (a trajectory
+/// whose repeats differ, an output that cannot be written) exits 1, as `dda run` does
+/// for a simulation that cannot go on.
 fn main() -> ExitCode {
-    let task = std::env::args().nth(1);
-    match task.as_deref() {
-        None | Some("help" | "--help" | "-h") => {
-            println!(
-                "usage: cargo xtask <task>\n\ntasks:\n  robustness   section 4 cases x detectors -> docs/robustness.md\n  scaling [--blocks 826,3300,10000,30000,100000] [--duration 0.1] [--out DIR] [--write-scenes DIR]   time per step against blocks -> docs/scaling.md (or the columns as scene files)\n  accuracy [--out DIR]   error against wall time; the columns' penetration and energy -> docs/accuracy.md\n  sweep [--models 20,93,229,826] [--detectors cover,type-1,type-2] [--rtol 1,2,4,6,8,10] [--jobs N] [--max-steps N] [--out DIR]\n  target [--runs 5] [--repeat 1] [--model 826] [--out DIR]   the 5.2b column's speed targets over perturbed trajectories (medians, ms per OCI iteration; with --repeat R each trajectory's fastest of R runs)"
-            );
-            ExitCode::SUCCESS
-        }
-        Some("robustness") => match robustness::run(&root()) {
-            Ok(()) => ExitCode::SUCCESS,
-            Err(e) => {
-                eprintln!("xtask robustness: {e}");
-                ExitCode::FAILURE
-            }
-        },
-        Some("accuracy") => {
-            let args: Vec<String> = std::env::args().skip(2).collect();
-            let out = match args.as_slice() {
-                [] => root().join("docs"),
-                [flag, dir] if flag == "--out" => PathBuf::from(dir),
-                _ => {
-                    eprintln!("xtask accuracy: usage: cargo xtask accuracy [--out DIR]");
-                    return ExitCode::from(2);
-                }
-            };
-            match accuracy::run(&out) {
-                Ok(()) => ExitCode::SUCCESS,
-                Err(e) => {
-                    eprintln!("xtask accuracy: {e}");
-                    ExitCode::FAILURE
-                }
-            }
-        }
-        Some("scaling") => {
-            let args: Vec<String> = std::env::args().skip(2).collect();
-            match scaling::parse(&args, &root()).and_then(|o| scaling::run(&o)) {
-                Ok(()) => ExitCode::SUCCESS,
-                Err(e) => {
-                    eprintln!("xtask scaling: {e}");
-                    ExitCode::from(2)
-                }
-            }
-        }
-        Some("sweep") => {
-            let args: Vec<String> = std::env::args().skip(2).collect();
-            let result = sweep::parse(&args).and_then(|o| sweep::run(&root(), &o));
-            match result {
-                Ok(()) => ExitCode::SUCCESS,
-                Err(e) => {
-                    eprintln!("xtask sweep: {e}");
-                    ExitCode::from(2)
-                }
-            }
-        }
-        Some("target") => {
-            let args: Vec<String> = std::env::args().skip(2).collect();
-            // Bad options exit 2; a measurement that cannot be made or repeated (a
-            // trajectory whose repeats differ, an output that cannot be written) exits 1,
-            // as `dda run` does for a simulation that cannot go on.
-            match target::parse(&args) {
-                Err(e) => {
-                    eprintln!("xtask target: {e}");
-                    ExitCode::from(2)
-                }
-                Ok(o) => match target::run(&root(), &o) {
-                    Ok(()) => ExitCode::SUCCESS,
-                    Err(e) => {
-                        eprintln!("xtask target: {e}");
-                        ExitCode::from(1)
-                    }
-                },
-            }
-        }
-        Some(other) => {
-            eprintln!("xtask: unknown task `{other}` (try `cargo xtask help`)");
-            ExitCode::from(2)
+    let cli = Cli::parse();
+    let root = root();
+    let (name, result) = match cli.task {
+        Task::Robustness => ("robustness", robustness::run(&root)),
+        Task::Scaling(o) => ("scaling", scaling::run(&o.at(&root))),
+        Task::Accuracy { out } => (
+            "accuracy",
+            accuracy::run(&out.unwrap_or_else(|| root.join("docs"))),
+        ),
+        Task::Sweep(o) => ("sweep", sweep::run(&root, &o)),
+        Task::Target(o) => ("target", target::run(&root, &o)),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("xtask {name}: {e}");
+            ExitCode::from(1)
         }
     }
 }

@@ -2,10 +2,10 @@
 //! each outcome (`dda_bench::verdict`), draws it, and writes `docs/robustness.md` with
 //! our verdicts beside the paper's.
 
-use dda::bench::{HARD_CASES, judge_collision_with};
-use dda::core::{RunOptions, Simulation};
-use dda::geom::DVec2;
-use dda::report::{frame_view, outcome_svg};
+use dda_bench::{HARD_CASES, judge_collision_with};
+use dda_core::{RunOptions, Simulation};
+use dda_geom::DVec2;
+use dda_report::{frame_view, outcome_svg};
 use std::fmt::Write as _;
 use std::path::Path;
 

@@ -9,60 +9,41 @@
 //! (`DIR/column-N.json`) instead, for `dda run` with `--checkpoint-every`: a column too
 //! large to run in one sitting can then be resumed (`dda resume`).
 
-use dda::bench::{PAPER_COLUMNS, column_scene};
-use dda::core::scene::Scene;
-use dda::core::{RunOptions, Simulation};
-use dda::report::plot;
+use dda_bench::{PAPER_COLUMNS, column_scene};
+use dda_core::scene::Scene;
+use dda_core::{RunOptions, Simulation};
+use dda_report::plot;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Options of `cargo xtask scaling`.
-#[derive(Debug)]
+#[derive(Debug, clap::Args)]
 pub struct Options {
     /// Target block counts.
+    #[arg(long, value_delimiter = ',', default_values_t = [826, 3300, 10_000, 30_000, 100_000])]
     blocks: Vec<usize>,
     /// Simulated seconds per run.
+    #[arg(long, default_value_t = 0.1, value_parser = crate::args::positive_number)]
     duration: f64,
-    /// Where to write scaling.md and scaling.svg.
-    out: PathBuf,
+    /// Where to write scaling.md and results/scaling.svg (default: docs/).
+    #[arg(long)]
+    out: Option<PathBuf>,
     /// Write the columns as scene files here instead of running them.
+    #[arg(long)]
     write_scenes: Option<PathBuf>,
 }
 
-/// Parses `--blocks 826,10000,100000 --duration 0.1 --out DIR [--write-scenes DIR]`.
-pub fn parse(args: &[String], root: &Path) -> Result<Options, String> {
-    let mut o = Options {
-        blocks: vec![826, 3300, 10_000, 30_000, 100_000],
-        duration: 0.1,
-        out: root.join("docs"),
-        write_scenes: None,
-    };
-    for (flag, value) in crate::args::pairs(args)? {
-        match flag {
-            "--blocks" => {
-                o.blocks = value
-                    .split(',')
-                    .map(|v| {
-                        v.trim()
-                            .parse::<usize>()
-                            .map_err(|e| format!("--blocks {v}: {e}"))
-                    })
-                    .collect::<Result<_, _>>()?;
-            }
-            "--duration" => {
-                o.duration = value
-                    .parse::<f64>()
-                    .ok()
-                    .filter(|d| d.is_finite() && *d > 0.0)
-                    .ok_or_else(|| format!("--duration {value}: not a positive number"))?;
-            }
-            "--out" => o.out = PathBuf::from(value),
-            "--write-scenes" => o.write_scenes = Some(PathBuf::from(value)),
-            other => return Err(format!("unknown option {other}")),
-        }
+impl Options {
+    /// The options with their output folder resolved against the workspace root.
+    pub fn at(mut self, root: &Path) -> Options {
+        self.out.get_or_insert_with(|| root.join("docs"));
+        self
     }
-    Ok(o)
+
+    fn out(&self) -> PathBuf {
+        self.out.clone().unwrap_or_else(|| PathBuf::from("docs"))
+    }
 }
 
 /// One run of the study.
@@ -109,7 +90,7 @@ pub fn run(o: &Options) -> Result<(), String> {
     if let Some(dir) = &o.write_scenes {
         return write_scenes(o, dir);
     }
-    std::fs::create_dir_all(&o.out).map_err(|e| format!("{}: {e}", o.out.display()))?;
+    std::fs::create_dir_all(o.out()).map_err(|e| format!("{}: {e}", o.out().display()))?;
     let mut rows = Vec::new();
     for &n in &o.blocks {
         let t0 = Instant::now();
@@ -214,11 +195,11 @@ pub fn run(o: &Options) -> Result<(), String> {
         true,
         true,
     );
-    let results = o.out.join("results");
+    let results = o.out().join("results");
     std::fs::create_dir_all(&results).map_err(|e| format!("{}: {e}", results.display()))?;
     std::fs::write(results.join("scaling.svg"), svg).map_err(|e| format!("scaling.svg: {e}"))?;
     doc.push_str("\n![time per step](results/scaling.svg)\n");
-    let path = o.out.join("scaling.md");
+    let path = o.out().join("scaling.md");
     // The readings written by hand under the table (its `## ` sections) are kept.
     if let Ok(old) = std::fs::read_to_string(&path) {
         doc.push_str(hand_written(&old));
@@ -237,7 +218,7 @@ fn hand_written(doc: &str) -> &str {
 #[cfg(test)]
 mod tests {
     use super::{Options, hand_written, scaled_column, write_scenes};
-    use dda::core::scene::Scene;
+    use dda_core::scene::Scene;
     use std::path::PathBuf;
 
     /// A column written with `--write-scenes` loads back as the same scene, under the
@@ -248,7 +229,7 @@ mod tests {
         let o = Options {
             blocks: vec![826],
             duration: 0.05,
-            out: PathBuf::from("unused"),
+            out: Some(PathBuf::from("unused")),
             write_scenes: Some(dir.clone()),
         };
         write_scenes(&o, &dir).expect("written");

@@ -10,9 +10,9 @@
 //! not permissible, so that a detector whose time step collapses cannot hold up a sweep.
 
 use crate::args;
-use dda::bench::{PAPER_COLUMNS, mechanical_energy};
-use dda::core::{RunOptions, Simulation};
-use dda::report::plot;
+use dda_bench::{PAPER_COLUMNS, mechanical_energy};
+use dda_core::{RunOptions, Simulation};
+use dda_report::{csv_record, plot};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -56,65 +56,34 @@ pub struct Row {
 }
 
 /// Options of a sweep.
+#[derive(Debug, clap::Args)]
 pub struct Options {
     /// Block counts of the columns to run.
+    #[arg(long, value_delimiter = ',', value_parser = args::paper_column,
+          default_values_t = [20, 93, 229, 826])]
     pub models: Vec<usize>,
     /// Detectors.
+    #[arg(long, value_delimiter = ',', value_parser = args::detector,
+          default_values_t = ["cover".to_string(), "type-1".to_string(), "type-2".to_string()])]
     pub detectors: Vec<String>,
     /// Contact tolerance ratios.
+    #[arg(long = "rtol", value_delimiter = ',', value_parser = args::positive_number,
+          default_values_t = [1.0, 2.0, 4.0, 6.0, 8.0, 10.0])]
     pub rtols: Vec<f64>,
     /// Runs at once.
+    #[arg(long, default_value_t = 1, value_parser = args::positive_size)]
     pub jobs: usize,
     /// Steps after which a run is stopped and counted as failed.
+    #[arg(long, default_value_t = MAX_STEPS, value_parser = args::positive_count)]
     pub max_steps: u64,
     /// Output directory.
+    #[arg(long, default_value = "runs/sweep")]
     pub out: PathBuf,
 }
 
 /// Steps after which a run is stopped and counted as not permissible, unless
 /// `--max-steps` says otherwise (nearly four times the paper's longest run).
 pub const MAX_STEPS: u64 = 5000;
-
-/// Parses `--models 20,93 --detectors cover --rtol 1,2 --jobs N --out DIR`.
-pub fn parse(args: &[String]) -> Result<Options, String> {
-    let mut o = Options {
-        models: vec![20, 93, 229, 826],
-        detectors: vec!["cover".into(), "type-1".into(), "type-2".into()],
-        rtols: vec![1.0, 2.0, 4.0, 6.0, 8.0, 10.0],
-        jobs: 1,
-        max_steps: MAX_STEPS,
-        out: PathBuf::from("runs/sweep"),
-    };
-    let list = |v: &str| -> Vec<String> { v.split(',').map(|s| s.trim().to_string()).collect() };
-    for (flag, value) in args::pairs(args)? {
-        match flag {
-            "--models" => {
-                o.models = list(value)
-                    .iter()
-                    .map(|m| args::paper_column(flag, m))
-                    .collect::<Result<_, _>>()?;
-            }
-            "--detectors" => o.detectors = list(value),
-            "--rtol" => {
-                o.rtols = list(value)
-                    .iter()
-                    .map(|r| match r.parse::<f64>() {
-                        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
-                        _ => Err(format!("--rtol: `{r}` is not a positive number")),
-                    })
-                    .collect::<Result<_, _>>()?;
-            }
-            "--jobs" => o.jobs = args::positive_count(flag, value)? as usize,
-            "--out" => o.out = PathBuf::from(value),
-            "--max-steps" => o.max_steps = args::positive_count(flag, value)?,
-            other => return Err(format!("unknown option `{other}`")),
-        }
-    }
-    for d in &o.detectors {
-        dda::contact::detector_by_name(d).map_err(|e| format!("--detectors: {e}"))?;
-    }
-    Ok(o)
-}
 
 /// Runs one combination, stopping it after `max_steps` steps, with gravity scaled by
 /// `gravity_factor` (1 for the paper's scene; `cargo xtask target` perturbs it).
@@ -275,26 +244,31 @@ pub const CSV_HEADER: &str = "model,detector,r_tol,steps,oci_cycles,detection_s,
 
 /// One run as a line of `sweep.csv`, without its newline.
 pub fn csv_line(r: &Row) -> String {
-    format!(
-        "{},{},{},{},{},{:.4},{:.4},{:.4},{:.4},{:e},{:e},{},{}",
-        r.model,
-        r.detector,
-        r.r_tol,
-        r.steps,
-        r.oci_cycles,
-        r.detection_s,
-        r.assembly_s,
-        r.solve_s,
-        r.total_s,
-        r.max_penetration,
-        r.energy_error,
+    csv_record(csv_fields(r))
+}
+
+/// The fields of one run in `sweep.csv`.
+pub fn csv_fields(r: &Row) -> Vec<String> {
+    vec![
+        r.model.to_string(),
+        r.detector.clone(),
+        r.r_tol.to_string(),
+        r.steps.to_string(),
+        r.oci_cycles.to_string(),
+        format!("{:.4}", r.detection_s),
+        format!("{:.4}", r.assembly_s),
+        format!("{:.4}", r.solve_s),
+        format!("{:.4}", r.total_s),
+        format!("{:e}", r.max_penetration),
+        format!("{:e}", r.energy_error),
         if r.verdict {
             "permissible"
         } else {
             "not permissible"
-        },
-        r.error.as_deref().unwrap_or("").replace(',', ";")
-    )
+        }
+        .to_string(),
+        r.error.clone().unwrap_or_default(),
+    ]
 }
 
 fn write_files(out: &Path, rows: &[Row]) -> Result<(), String> {
@@ -346,7 +320,7 @@ fn table_html(markdown: &str) -> String {
         let tag = if k == 0 { "th" } else { "td" };
         s.push_str("<tr>");
         for cell in line.trim().trim_matches('|').split('|') {
-            let cell = dda::report::escape(cell.trim());
+            let cell = dda_report::escape(cell.trim());
             let cell = match cell.strip_prefix("**").and_then(|c| c.strip_suffix("**")) {
                 Some(bold) => format!("<b>{bold}</b>"),
                 None => cell,

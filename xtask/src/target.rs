@@ -21,6 +21,7 @@
 
 use crate::args;
 use crate::sweep::{self, Row, run_one};
+use dda_report::csv_record;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -30,35 +31,20 @@ const TOTAL_TARGET_S: f64 = 5.0;
 const DETECTION_TARGET_S: f64 = 0.5;
 
 /// Options of a target measurement.
+#[derive(Debug, clap::Args)]
 pub struct Options {
     /// Trajectories to run.
+    #[arg(long, default_value_t = 5, value_parser = args::positive_size)]
     pub runs: usize,
     /// Runs of each trajectory; a row reports the fastest.
+    #[arg(long, default_value_t = 1, value_parser = args::positive_size)]
     pub repeat: usize,
     /// Block count of the paper's column to run (826 for the target itself).
+    #[arg(long, default_value_t = 826, value_parser = args::paper_column)]
     pub model: usize,
     /// Output directory, relative to the workspace root.
+    #[arg(long, default_value = "runs/target")]
     pub out: PathBuf,
-}
-
-/// Parses `--runs K --repeat R --model N --out DIR`.
-pub fn parse(args: &[String]) -> Result<Options, String> {
-    let mut o = Options {
-        runs: 5,
-        repeat: 1,
-        model: 826,
-        out: PathBuf::from("runs/target"),
-    };
-    for (flag, value) in args::pairs(args)? {
-        match flag {
-            "--runs" => o.runs = args::positive_count(flag, value)? as usize,
-            "--repeat" => o.repeat = args::positive_count(flag, value)? as usize,
-            "--model" => o.model = args::paper_column(flag, value)?,
-            "--out" => o.out = PathBuf::from(value),
-            other => return Err(format!("unknown option `{other}`")),
-        }
-    }
-    Ok(o)
 }
 
 /// The relative change of gravity of run `k`: 0, then +1, -1, +2, -2, ... times 1e-12.
@@ -178,16 +164,15 @@ pub fn run(root: &Path, o: &Options) -> Result<(), String> {
     );
     for t in &runs {
         let r = &t.best;
-        let _ = writeln!(
-            csv,
-            "{:e},{},{},{},{},{:.4}",
-            t.eps,
-            sweep::csv_line(r),
-            r.factorisations,
-            r.low_rank_solves,
-            o.repeat,
-            t.median_total_s
-        );
+        let mut fields = vec![format!("{:e}", t.eps)];
+        fields.extend(sweep::csv_fields(r));
+        fields.extend([
+            r.factorisations.to_string(),
+            r.low_rank_solves.to_string(),
+            o.repeat.to_string(),
+            format!("{:.4}", t.median_total_s),
+        ]);
+        let _ = writeln!(csv, "{}", csv_record(fields));
     }
     for (name, text) in [("target.csv", &csv), ("target.md", &report)] {
         std::fs::write(out.join(name), text).map_err(|e| format!("{name}: {e}"))?;
@@ -275,7 +260,7 @@ fn report(o: &Options, runs: &[Trajectory]) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::{Options, gravity_eps, median, parse, run};
+    use super::{Options, gravity_eps, median, run};
     use std::path::PathBuf;
 
     /// Runs two trajectories of the 20-block column, `repeat` times each, in a temporary
@@ -379,30 +364,40 @@ mod tests {
 
     #[test]
     fn bad_options_are_named() {
-        let args = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        use clap::Parser;
+        #[derive(Parser)]
+        struct Cli {
+            #[command(flatten)]
+            o: Options,
+        }
+        let parse = |v: &[&str]| {
+            Cli::try_parse_from(std::iter::once("target").chain(v.iter().copied()))
+                .map(|c| c.o)
+                .map_err(|e| e.to_string())
+        };
         assert!(
-            parse(&args(&["--runs", "0"]))
+            parse(&["--runs", "0"])
                 .err()
                 .is_some_and(|e| e.contains("--runs"))
         );
         assert!(
-            parse(&args(&["--model", "7"]))
+            parse(&["--model", "7"])
                 .err()
                 .is_some_and(|e| e.contains("`7`"))
         );
         assert!(
-            parse(&args(&["--runs"]))
+            parse(&["--runs"])
                 .err()
-                .is_some_and(|e| e.contains("needs a value"))
+                .is_some_and(|e| e.contains("--runs"))
         );
         assert!(
-            parse(&args(&["--repeat", "0"]))
+            parse(&["--repeat", "0"])
                 .err()
                 .is_some_and(|e| e.contains("--repeat"))
         );
-        let o = parse(&args(&["--runs", "3", "--model", "20"])).expect("valid");
+        let o = parse(&["--runs", "3", "--model", "20"]).expect("valid");
         assert_eq!((o.runs, o.repeat, o.model), (3, 1, 20));
-        let o = parse(&args(&["--repeat", "4"])).expect("valid");
+        let o = parse(&["--repeat", "4"]).expect("valid");
         assert_eq!((o.runs, o.repeat), (5, 4));
     }
 }

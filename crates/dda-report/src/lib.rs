@@ -1,6 +1,7 @@
-//! What a run writes: history.csv rows, frames.jsonl (the recorded instants), SVG
-//! pictures of them, plots and the self-contained report.html; pictures of a collision's
-//! outcome for the robustness report.
+//! What a dda-rs run writes for people: history.csv rows, frames.jsonl (the recorded
+//! instants), SVG pictures of them, plots and the self-contained report.html; pictures of
+//! a collision's outcome for the robustness report. Its own crate, so that the studies
+//! (`xtask`) draw plots without the command-line facade.
 
 mod html;
 mod plot;
@@ -17,24 +18,42 @@ use std::fmt::Write as _;
 pub const HISTORY_HEADER: &str = "step,t,dt,oci,cuts,candidates,active_contacts,closed_contacts,\
 max_penetration,kinetic_energy,detection_s,assembly_s,solve_s";
 
+/// One CSV record of `fields` (quoted where a field needs it), without its newline: the
+/// one writer of every CSV file the project writes (history.csv, the studies' tables).
+pub fn csv_record<I, F>(fields: I) -> String
+where
+    I: IntoIterator<Item = F>,
+    F: AsRef<[u8]>,
+{
+    let mut w = csv::WriterBuilder::new()
+        .terminator(csv::Terminator::Any(b'\n'))
+        .from_writer(Vec::new());
+    // Writing to memory cannot fail; a record that did would be an empty line.
+    if w.write_record(fields).is_err() {
+        return String::new();
+    }
+    let mut bytes = w.into_inner().unwrap_or_default();
+    bytes.pop();
+    String::from_utf8_lossy(&bytes).into_owned()
+}
+
 /// One row of history.csv (no trailing newline).
 pub fn history_row(r: &StepRecord) -> String {
-    format!(
-        "{},{:e},{:e},{},{},{},{},{},{:e},{:e},{:e},{:e},{:e}",
-        r.step,
-        r.t,
-        r.dt,
-        r.oci,
-        r.cuts,
-        r.candidates,
-        r.active_contacts,
-        r.closed_contacts,
-        r.max_penetration,
-        r.kinetic_energy,
-        r.detection_s,
-        r.assembly_s,
-        r.solve_s
-    )
+    csv_record([
+        r.step.to_string(),
+        format!("{:e}", r.t),
+        format!("{:e}", r.dt),
+        r.oci.to_string(),
+        r.cuts.to_string(),
+        r.candidates.to_string(),
+        r.active_contacts.to_string(),
+        r.closed_contacts.to_string(),
+        format!("{:e}", r.max_penetration),
+        format!("{:e}", r.kinetic_energy),
+        format!("{:e}", r.detection_s),
+        format!("{:e}", r.assembly_s),
+        format!("{:e}", r.solve_s),
+    ])
 }
 
 /// One recorded instant of a run, as a line of frames.jsonl: what the report animates

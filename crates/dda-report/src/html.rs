@@ -27,12 +27,15 @@ pub struct HistoryRow {
 
 /// Reads history.csv (with its header); errors name the line.
 pub fn parse_history(text: &str) -> Result<Vec<HistoryRow>, String> {
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
+    let mut reader = csv::ReaderBuilder::new().from_reader(text.as_bytes());
+    let header = reader
+        .headers()
+        .map_err(|e| format!("line 1: {e}"))?
+        .clone();
     let col = |name: &str| {
         header
             .iter()
-            .position(|h| *h == name)
+            .position(|h| h == name)
             .ok_or_else(|| format!("line 1: no column `{name}`"))
     };
     let cols = [
@@ -44,14 +47,18 @@ pub fn parse_history(text: &str) -> Result<Vec<HistoryRow>, String> {
         col("kinetic_energy")?,
     ];
     let mut rows = Vec::new();
-    for (k, line) in lines.enumerate() {
-        let fields: Vec<&str> = line.split(',').collect();
+    for record in reader.records() {
+        let record = record.map_err(|e| match e.position() {
+            Some(p) => format!("line {}: {e}", p.line()),
+            None => e.to_string(),
+        })?;
+        let line = record.position().map_or(0, |p| p.line());
         let mut v = [0.0; 6];
         for (slot, &c) in v.iter_mut().zip(&cols) {
-            *slot = fields
+            *slot = record
                 .get(c)
                 .and_then(|f| f.parse::<f64>().ok())
-                .ok_or_else(|| format!("line {}: column {} is not a number", k + 2, c + 1))?;
+                .ok_or_else(|| format!("line {line}: column {} is not a number", c + 1))?;
         }
         rows.push(HistoryRow {
             t: v[0],
