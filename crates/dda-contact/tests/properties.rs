@@ -11,8 +11,7 @@ use dda_contact::{
 use dda_geom::{Aabb, ConvexPolygon, CoverSource, DVec2, Motion, VertexEdge, signed_distance};
 use proptest::prelude::*;
 
-#[path = "../../../tests/support/polygons.rs"]
-mod polygons;
+use dda_geom::test_support as polygons;
 use polygons::near_pair;
 
 const IDS: NeighbourPair = NeighbourPair { a: 0, b: 1 };

@@ -16,7 +16,7 @@
 //! step-start gradient it misses the second-order part of the gap, q'' D D / 2 (a block
 //! turning by theta moves a point at radius rho by theta^2 rho / 2 more than the first
 //! order says); the force times that is work no motion paid for. It made a block spinning
-//! in contact at theta_max per step gain up to 8% of its energy in `tests/hard_pairs.rs`,
+//! in contact at theta_max per step gain up to 8% of its energy in `tests/physics/hard_pairs.rs`,
 //! which the midpoint rows remove.
 
 use crate::kinematics::{Vec6, along, dot, t_rows};

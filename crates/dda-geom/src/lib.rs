@@ -15,6 +15,8 @@ mod error;
 mod measures;
 mod polygon;
 pub mod shapes;
+#[cfg(feature = "test-support")]
+pub mod test_support;
 
 pub use self::aabb::Aabb;
 pub use self::cut::{Cutting, JointSet, Line, Split, cut_by_joint_sets, cut_by_lines, split};

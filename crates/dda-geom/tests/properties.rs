@@ -13,8 +13,7 @@ use parry2d_f64::shape::ConvexPolygon as ParryPolygon;
 use proptest::prelude::*;
 use std::f64::consts::PI;
 
-#[path = "../../../tests/support/polygons.rs"]
-mod polygons;
+use dda_geom::test_support as polygons;
 use polygons::{near_pair, polygon_at};
 
 const EPS: f64 = f64::EPSILON;

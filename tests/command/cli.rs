@@ -27,11 +27,34 @@ fn run_scene(out: &Path, extra: &[&str]) -> Output {
 }
 
 /// A fresh scratch directory for one test.
-fn scratch(name: &str) -> PathBuf {
+fn scratch(name: &str) -> Scratch {
     let d = std::env::temp_dir().join(format!("dda-cli-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
-    d
+    Scratch(d)
+}
+
+/// A test's scratch folder, removed when the test ends, passed or failed (a failing
+/// assertion unwinds through the drop).
+struct Scratch(PathBuf);
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
 }
 
 /// Writes the test scene with each `(from, to)` replaced (every `from` must be there)
@@ -66,7 +89,8 @@ fn summary(dir: &Path) -> serde_json::Value {
 
 #[test]
 fn run_writes_summary_history_and_frames() {
-    let out = scratch("run").join("out");
+    let dir = scratch("run");
+    let out = dir.join("out");
     let o = run_scene(&out, &["--quiet"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let s = summary(&out);
@@ -137,7 +161,8 @@ fn same_scene_twice_gives_identical_summaries_apart_from_timing() {
 
 #[test]
 fn rtol_scales_tolerance_and_step_displacement_together() {
-    let out = scratch("rtol").join("out");
+    let dir = scratch("rtol");
+    let out = dir.join("out");
     let o = run_scene(&out, &["--rtol", "3", "--quiet"]);
     assert!(o.status.success());
     let s = summary(&out);
@@ -149,7 +174,8 @@ fn rtol_scales_tolerance_and_step_displacement_together() {
 
 #[test]
 fn detector_override_is_used() {
-    let out = scratch("det").join("out");
+    let dir = scratch("det");
+    let out = dir.join("out");
     let o = run_scene(&out, &["--detector", "type-2", "--quiet"]);
     assert!(o.status.success());
     assert_eq!(summary(&out)["detector"], "type-2");
@@ -320,7 +346,8 @@ fn failed_simulation_exits_1_and_keeps_last_good_state() {
 
 #[test]
 fn render_redraws_frames_and_report_without_simulating() {
-    let out = scratch("render").join("out");
+    let dir = scratch("render");
+    let out = dir.join("out");
     assert!(run_scene(&out, &["--quiet"]).status.success());
     let read = |p: &str| std::fs::read(out.join(p)).unwrap();
     let report = read("report.html");
@@ -954,7 +981,8 @@ fn broken_physics_is_a_failure_not_a_success() {
 /// `--max-steps` caps any run: exit 1, status "stopped", the state kept.
 #[test]
 fn max_steps_caps_a_run() {
-    let out = scratch("max-steps").join("out");
+    let dir = scratch("max-steps");
+    let out = dir.join("out");
     let o = run_scene(&out, &["--quiet", "--max-steps", "7"]);
     assert_eq!(
         o.status.code(),
@@ -1004,7 +1032,8 @@ fn the_step_respects_the_motion_it_starts_with() {
 /// and the system's size, not an abort.
 #[test]
 fn a_factor_too_large_for_memory_exits_1_with_the_estimate() {
-    let out = scratch("memory").join("out");
+    let dir = scratch("memory");
+    let out = dir.join("out");
     let o = run_scene(&out, &["--quiet", "--max-memory", "1K"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");

@@ -1,10 +1,10 @@
-//! Random convex polygons for property tests, shared by the crates' test suites:
+//! Random convex polygons for property tests, shared by the workspace's test suites
+//! (feature `test-support`, for tests only):
 //! ellipse polygons (3 to 64 vertices, aspect up to 100), sliver wedges (tip angles down
 //! to 1 degree) and chamfered polygons (edges down to 1e-4 of the size), placed at random
 //! and given clockwise or counter-clockwise; and the property tests' configuration.
-#![allow(dead_code)]
 
-use dda_geom::{ConvexPolygon, DVec2};
+use crate::{ConvexPolygon, DVec2};
 use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
 use std::f64::consts::TAU;

@@ -57,8 +57,7 @@ use dda::core::{RunOptions, Scene, Simulation};
 use proptest::prelude::*;
 use proptest::test_runner::TestCaseError;
 
-#[path = "support/polygons.rs"]
-mod polygons;
+use dda_geom::test_support as polygons;
 
 /// A shape, centred at its centroid-ish origin, before rotation.
 #[derive(Clone, Debug)]

@@ -9,8 +9,7 @@
 // A panic is how a test reports failure.
 #![allow(clippy::unwrap_used)]
 
-#[path = "support/polygons.rs"]
-mod support;
+use dda_geom::test_support as support;
 
 use dda::bench::{Layout, Masonry};
 use dda::core::{RunOptions, Simulation};
