@@ -565,7 +565,7 @@ fn a_penetration_beyond_the_tolerance_stops_the_run_unless_keep_going() {
 }
 
 /// Runs `dda` with `args`, killing it after `limit`: None if it had to be killed.
-fn dda_within(args: &[&str], limit: std::time::Duration) -> Option<Output> {
+pub(crate) fn dda_within(args: &[&str], limit: std::time::Duration) -> Option<Output> {
     let mut child = Command::new(env!("CARGO_BIN_EXE_dda"))
         .args(args)
         .stdout(std::process::Stdio::piped())

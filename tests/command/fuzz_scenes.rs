@@ -11,10 +11,10 @@
 // A panic is how a test reports failure.
 #![allow(clippy::unwrap_used)]
 
+use super::cli::dda_within;
 use serde_json::Value;
 use std::path::Path;
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// The seed of the mutants unless `DDA_FUZZ_SEED` is set.
 const SEED: u64 = 20261124;
@@ -191,26 +191,6 @@ fn mutate_text(text: &[u8], rng: &mut Rng) -> Vec<u8> {
         }
     }
     t
-}
-
-/// Runs `dda` with `args`, killing it after `limit` (None: it had to be killed).
-fn dda_within(args: &[&str], limit: Duration) -> Option<Output> {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_dda"))
-        .args(args)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let started = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if started.elapsed() > limit {
-            child.kill().unwrap_or(());
-            child.wait().unwrap();
-            return None;
-        }
-        std::thread::sleep(Duration::from_millis(1));
-    }
-    Some(child.wait_with_output().unwrap())
 }
 
 /// The scenes the mutants start from: the small built-ins and the test scene.
