@@ -25,9 +25,107 @@ use crate::simulation::Simulation;
 /// grid of equal blocks stand; 1e-3 keeps the force error of a decision to a thousandth
 /// of the lighter block's weight.
 pub(crate) const DECISION_BAND: f64 = 1e-3;
+use crate::scene::JointProps;
 use crate::springs::{contact_length, contact_points, shear_row};
-use dda_contact::ContactState;
+use dda_contact::{Contact, ContactState};
 use dda_geom::{DVec2, VertexEdge};
+
+/// The constants of the contact law.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Law {
+    /// Normal penalty p, N/m.
+    pub normal_penalty: f64,
+    /// Shear penalty, N/m.
+    pub shear_penalty: f64,
+    /// How far a closed contact's normal distance must be positive for it to open, m.
+    pub open_band: f64,
+}
+
+/// What the trial solution says of one contact.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Trial {
+    /// Normal distance after the trial step, m (negative: penetrating).
+    pub d: f64,
+    /// The force below which a change of state is negligible, N (see the module docs).
+    pub band: f64,
+}
+
+/// The contact law for one contact: its state after an open-close iteration whose
+/// trial solution gives `trial`, for joint `joint` and law `law`. `shear(anchor)` is the
+/// trial's tangential displacement of the vertex from the point at ratio `anchor` along
+/// the edge; `trial_ratio()` the vertex's ratio along the edge at the trial positions;
+/// `length()` the length a bond's cohesion and tension act over. A pure function: the
+/// closures are asked only where the decision needs them.
+pub fn decide(
+    c: &Contact,
+    joint: &JointProps,
+    law: &Law,
+    trial: Trial,
+    shear: impl Fn(f64) -> f64,
+    trial_ratio: impl FnOnce() -> f64,
+    length: impl Fn() -> f64,
+) -> Contact {
+    let (pn, ps) = (law.normal_penalty, law.shear_penalty);
+    let Trial { d, band } = trial;
+    let mut n = *c;
+    match c.state {
+        ContactState::Open => {
+            if d < 0.0 && pn * -d > band {
+                // Closes where its trajectory crossed the edge's line.
+                let r1 = trial_ratio();
+                let t = if c.d_n > 0.0 {
+                    c.d_n / (c.d_n - d)
+                } else {
+                    0.0
+                };
+                n.locked_r = (c.r + t * (r1 - c.r)).clamp(0.0, 1.0);
+                n.state = if joint.has_shear() {
+                    ContactState::Locked
+                } else {
+                    ContactState::Sliding
+                };
+                n.slide_dir = 0.0;
+                n.normal_force = -pn * d;
+            }
+        }
+        ContactState::Locked | ContactState::Sliding => {
+            let holds_tension = c.bonded
+                && joint.tensile_strength > 0.0
+                && pn * d <= joint.tensile_strength * length();
+            if d > law.open_band && pn * d > band && !holds_tension {
+                n.state = ContactState::Open;
+                n.bonded = false;
+                n.normal_force = 0.0;
+            } else {
+                n.normal_force = -pn * d;
+                if joint.has_shear() {
+                    if c.state == ContactState::Locked {
+                        let s = shear(c.locked_r);
+                        let mut limit = n.normal_force.max(0.0) * joint.tan_phi;
+                        if c.bonded {
+                            limit += joint.cohesion * length();
+                        }
+                        if ps * s.abs() > limit + band {
+                            n.state = ContactState::Sliding;
+                            n.slide_dir = s.signum();
+                            n.bonded = false;
+                        }
+                    } else {
+                        let s = shear(c.r.clamp(0.0, 1.0));
+                        if c.slide_dir == 0.0 {
+                            n.slide_dir = s.signum();
+                        } else if s * c.slide_dir < 0.0 && ps * s.abs() > band {
+                            // The motion reversed against friction: it sticks.
+                            n.state = ContactState::Locked;
+                            n.locked_r = c.r.clamp(0.0, 1.0);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    n
+}
 
 impl Simulation {
     /// Sets each block's force scale (see the module docs): the magnitude of the external
@@ -58,12 +156,15 @@ impl Simulation {
     /// changed state.
     pub(crate) fn update_states(&mut self) -> usize {
         let p = &self.model.params;
-        let (pn, ps) = (p.normal_penalty, p.shear_penalty);
-        // A closed contact opens only beyond a band of 1e-9 d_tol: blocks that touch to
-        // rounding (joint faces cut from one rock) otherwise chatter between open and
-        // closed on d of order 1e-17 m and never converge. The tension held inside the
-        // band, p * 1e-9 d_tol, is negligible (our choice; the paper is silent).
-        let open_band = 1e-9 * p.d_tol;
+        let law = Law {
+            normal_penalty: p.normal_penalty,
+            shear_penalty: p.shear_penalty,
+            // A closed contact opens only beyond a band of 1e-9 d_tol: blocks that touch
+            // to rounding (joint faces cut from one rock) otherwise chatter between open
+            // and closed on d of order 1e-17 m and never converge. The tension held inside
+            // the band, p * 1e-9 d_tol, is negligible (our choice; the paper is silent).
+            open_band: 1e-9 * p.d_tol,
+        };
         let mut changed = 0;
         self.scratch.flipped.clear();
         for k in 0..self.state.contacts.contacts.len() {
@@ -71,85 +172,26 @@ impl Simulation {
             if !c.active {
                 continue;
             }
-            let j = self.joint(k);
-            let d = self.scratch.rows[k].eval(&self.scratch.d);
             let key = c.key;
-            // The force below which a change is negligible (see the module docs).
-            let band = DECISION_BAND
-                * self.scratch.force_scale[key.vertex_block as usize]
-                    .min(self.scratch.force_scale[key.edge_block as usize]);
-            let mut n = c;
-            match c.state {
-                ContactState::Open => {
-                    if d < 0.0 && pn * -d > band {
-                        // Closes where its trajectory crossed the edge's line.
-                        let r1 = self.trial_ratio(&c);
-                        let t = if c.d_n > 0.0 {
-                            c.d_n / (c.d_n - d)
-                        } else {
-                            0.0
-                        };
-                        n.locked_r = (c.r + t * (r1 - c.r)).clamp(0.0, 1.0);
-                        n.state = if j.has_shear() {
-                            ContactState::Locked
-                        } else {
-                            ContactState::Sliding
-                        };
-                        n.slide_dir = 0.0;
-                        n.normal_force = -pn * d;
-                    }
-                }
-                ContactState::Locked | ContactState::Sliding => {
-                    // Only bonds need the length: looked up (a load from the edge block's
-                    // shape, often a cache miss) only for them.
-                    let length = || contact_length(&c, &self.scratch.shapes);
-                    let holds_tension = c.bonded
-                        && j.tensile_strength > 0.0
-                        && pn * d <= j.tensile_strength * length();
-                    if d > open_band && pn * d > band && !holds_tension {
-                        n.state = ContactState::Open;
-                        n.bonded = false;
-                        n.normal_force = 0.0;
-                    } else {
-                        n.normal_force = -pn * d;
-                        if j.has_shear() {
-                            if c.state == ContactState::Locked {
-                                let s = shear_row(
-                                    &c,
-                                    &self.scratch.shapes,
-                                    &self.scratch.half,
-                                    c.locked_r,
-                                )
-                                .eval(&self.scratch.d);
-                                let mut limit = n.normal_force.max(0.0) * j.tan_phi;
-                                if c.bonded {
-                                    limit += j.cohesion * length();
-                                }
-                                if ps * s.abs() > limit + band {
-                                    n.state = ContactState::Sliding;
-                                    n.slide_dir = s.signum();
-                                    n.bonded = false;
-                                }
-                            } else {
-                                let s = shear_row(
-                                    &c,
-                                    &self.scratch.shapes,
-                                    &self.scratch.half,
-                                    c.r.clamp(0.0, 1.0),
-                                )
-                                .eval(&self.scratch.d);
-                                if c.slide_dir == 0.0 {
-                                    n.slide_dir = s.signum();
-                                } else if s * c.slide_dir < 0.0 && ps * s.abs() > band {
-                                    // The motion reversed against friction: it sticks.
-                                    n.state = ContactState::Locked;
-                                    n.locked_r = c.r.clamp(0.0, 1.0);
-                                }
-                            }
-                        }
-                    }
-                }
-            }
+            let (shapes, half, d) = (&self.scratch.shapes, &self.scratch.half, &self.scratch.d);
+            let trial = Trial {
+                d: self.scratch.rows[k].eval(d),
+                // The force below which a change is negligible (see the module docs).
+                band: DECISION_BAND
+                    * self.scratch.force_scale[key.vertex_block as usize]
+                        .min(self.scratch.force_scale[key.edge_block as usize]),
+            };
+            let n = decide(
+                &c,
+                &self.joint(k),
+                &law,
+                trial,
+                |anchor| shear_row(&c, shapes, half, anchor).eval(d),
+                || self.trial_ratio(&c),
+                // Only bonds need the length: looked up (a load from the edge block's
+                // shape, often a cache miss) only for them.
+                || contact_length(&c, shapes),
+            );
             if n.state != c.state || n.slide_dir != c.slide_dir {
                 changed += 1;
                 self.scratch.flipped.push(k as u32);
@@ -168,5 +210,126 @@ impl Simulation {
             &self.scratch.motions[k.edge_block as usize],
         );
         VertexEdge::new(mv.apply(p1), me.apply(p2), me.apply(p3)).r
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use dda_contact::ContactKey;
+
+    const LAW: Law = Law {
+        normal_penalty: 1e10,
+        shear_penalty: 4e9,
+        open_band: 1e-11,
+    };
+
+    fn joint(friction_deg: f64) -> JointProps {
+        JointProps {
+            tan_phi: friction_deg.to_radians().tan(),
+            ..JointProps::default()
+        }
+    }
+
+    fn contact(state: ContactState) -> Contact {
+        let key = ContactKey {
+            vertex_block: 0,
+            vertex: 0,
+            edge_block: 1,
+            edge: 0,
+        };
+        Contact {
+            state,
+            ..Contact::new(key, 0.0, 0.5, true)
+        }
+    }
+
+    fn decided(c: &Contact, j: &JointProps, d: f64, band: f64, s: f64) -> Contact {
+        decide(c, j, &LAW, Trial { d, band }, |_| s, || 0.5, || 0.5)
+    }
+
+    /// An open contact closes (locked, with friction) when it would penetrate with a
+    /// force above the band, and stays open below it; a closed one opens when it would
+    /// hold a tension above the band, and stays closed below it.
+    #[test]
+    fn open_and_closed_change_only_beyond_the_band() {
+        let j = joint(30.0);
+        let band = 100.0; // N: 1e-8 m of the normal penalty
+        let open = contact(ContactState::Open);
+        assert_eq!(
+            decided(&open, &j, -2e-8, band, 0.0).state,
+            ContactState::Locked
+        );
+        assert_eq!(
+            decided(&open, &j, -0.5e-8, band, 0.0).state,
+            ContactState::Open
+        );
+        let locked = contact(ContactState::Locked);
+        assert_eq!(
+            decided(&locked, &j, 2e-8, band, 0.0).state,
+            ContactState::Open
+        );
+        let kept = decided(&locked, &j, 0.5e-8, band, 0.0);
+        assert_eq!(kept.state, ContactState::Locked);
+        assert_eq!(kept.normal_force, -LAW.normal_penalty * 0.5e-8);
+        // Without a band, signs decide (beyond the open band of rounding).
+        assert_eq!(
+            decided(&open, &j, -1e-15, 0.0, 0.0).state,
+            ContactState::Locked
+        );
+        assert_eq!(
+            decided(&locked, &j, 1e-10, 0.0, 0.0).state,
+            ContactState::Open
+        );
+        // A frictionless joint's contact closes sliding.
+        assert_eq!(
+            decided(&open, &joint(0.0), -2e-8, band, 0.0).state,
+            ContactState::Sliding
+        );
+    }
+
+    /// A locked contact slides when its shear spring's force exceeds the Mohr-Coulomb
+    /// limit by more than the band, in the direction of the shear displacement.
+    #[test]
+    fn locked_contacts_slide_beyond_the_friction_limit_and_the_band() {
+        let j = joint(30.0);
+        let locked = contact(ContactState::Locked);
+        let d = -1e-6; // N = 1e4 N, limit N tan 30 = 5,774 N
+        let limit = 1e4 * j.tan_phi;
+        let s_at = |f: f64| f / LAW.shear_penalty;
+        let slid = decided(&locked, &j, d, 0.0, -s_at(limit * 1.01));
+        assert_eq!((slid.state, slid.slide_dir), (ContactState::Sliding, -1.0));
+        let band = 0.05 * limit;
+        assert_eq!(
+            decided(&locked, &j, d, band, s_at(limit * 1.01)).state,
+            ContactState::Locked
+        );
+        assert_eq!(
+            decided(&locked, &j, d, band, s_at(limit * 1.1)).state,
+            ContactState::Sliding
+        );
+    }
+
+    /// A sliding contact whose motion reverses against friction locks again, unless the
+    /// reversal's spring force is within the band.
+    #[test]
+    fn sliding_contacts_lock_when_the_motion_reverses() {
+        let j = joint(30.0);
+        let sliding = Contact {
+            slide_dir: 1.0,
+            ..contact(ContactState::Sliding)
+        };
+        assert_eq!(
+            decided(&sliding, &j, -1e-6, 0.0, -1e-7).state,
+            ContactState::Locked
+        );
+        assert_eq!(
+            decided(&sliding, &j, -1e-6, 1e3, -1e-7).state,
+            ContactState::Sliding
+        );
+        assert_eq!(
+            decided(&sliding, &j, -1e-6, 0.0, 1e-7).state,
+            ContactState::Sliding
+        );
     }
 }
