@@ -27,7 +27,7 @@ fn run_scene(out: &Path, extra: &[&str]) -> Output {
 }
 
 /// A fresh scratch directory for one test.
-fn scratch(name: &str) -> Scratch {
+pub(crate) fn scratch(name: &str) -> Scratch {
     let d = std::env::temp_dir().join(format!("dda-cli-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
@@ -36,7 +36,7 @@ fn scratch(name: &str) -> Scratch {
 
 /// A test's scratch folder, removed when the test ends, passed or failed (a failing
 /// assertion unwinds through the drop).
-struct Scratch(PathBuf);
+pub(crate) struct Scratch(PathBuf);
 
 impl std::ops::Deref for Scratch {
     type Target = Path;

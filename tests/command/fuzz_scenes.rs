@@ -221,9 +221,7 @@ fn hostile_scenes_get_exit_0_or_2_naming_the_file() {
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(1200);
-    let dir = std::env::temp_dir().join(format!("dda-fuzz-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = super::cli::scratch("fuzz");
     let bases = bases();
     let mut rng = Rng(seed | 1);
     // The mutants, made in order from the seed.
@@ -328,5 +326,4 @@ fn hostile_scenes_get_exit_0_or_2_naming_the_file() {
         passed.len(),
         sample.len()
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -252,8 +252,9 @@ fn report_renders_and_animates_in_headless_chromium() {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let good = std::fs::read_to_string(SCENE).unwrap();
-    // A run that completes, and one that fails (its report shows the diagnosis).
-    let failing = good.replace("frames = 2", "frames = 2\nmax_oci = 1");
+    // A run that completes, and one that fails (its report shows the diagnosis): a
+    // penalty too soft for the motion lets a contact penetrate beyond d_tol.
+    let failing = good.replace("normal_penalty = 1e9", "normal_penalty = 2e6");
     let browser = Browser::launch(&exe, dir.join("profile"));
     let mut page = Page::open(&browser);
     for (name, text, failed) in [("completed", &good, false), ("failed", &failing, true)] {
