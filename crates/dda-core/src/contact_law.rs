@@ -14,6 +14,17 @@
 //! zero; decided by sign they flip between open and closed, locked and sliding, on
 //! forces of 1e-4 of a block's weight and below, and the iteration never ends.
 //! `docs/method.md`, section 6, gives the measurements.
+//!
+//! **Cycles end closed and sliding** (our choice). A contact that changes state more
+//! than [`CYCLE_LIMIT`] times in one attempt of a step alternates with others: its
+//! decision depends on theirs, and both of its states are consistent with some of them
+//! (the two covers of one corner sharing a load, a shear force hovering at the friction
+//! limit). From then on, for the rest of the attempt, it may close, or go from locked to
+//! sliding, but neither open nor lock again; kept from opening, it is decided as a
+//! closed contact carrying no normal force (so it slides if sheared beyond the band).
+//! Closed never lets blocks pass into each other, and sliding bounds its shear force by
+//! friction instead of holding a block that is still moving. The next step decides it
+//! afresh.
 
 use crate::simulation::Simulation;
 
@@ -29,6 +40,10 @@ use crate::scene::JointProps;
 use crate::springs::{contact_length, contact_points, shear_row};
 use dda_contact::{Contact, ContactState};
 use dda_geom::{DVec2, VertexEdge};
+
+/// Changes of state a contact may make in one attempt of a step before it is taken to
+/// cycle: past it, a closed contact stays closed for the rest of the attempt.
+pub(crate) const CYCLE_LIMIT: u8 = 2;
 
 /// The constants of the contact law.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -181,17 +196,41 @@ impl Simulation {
                     * self.scratch.force_scale[key.vertex_block as usize]
                         .min(self.scratch.force_scale[key.edge_block as usize]),
             };
-            let n = decide(
-                &c,
-                &self.joint(k),
-                &law,
-                trial,
-                |anchor| shear_row(&c, shapes, half, anchor).eval(d),
-                || self.trial_ratio(&c),
-                // Only bonds need the length: looked up (a load from the edge block's
-                // shape, often a cache miss) only for them.
-                || contact_length(&c, shapes),
-            );
+            let joint = self.joint(k);
+            let decide_at = |trial: Trial| {
+                decide(
+                    &c,
+                    &joint,
+                    &law,
+                    trial,
+                    |anchor| shear_row(&c, shapes, half, anchor).eval(d),
+                    || self.trial_ratio(&c),
+                    // Only bonds need the length: looked up (a load from the edge block's
+                    // shape, often a cache miss) only for them.
+                    || contact_length(&c, shapes),
+                )
+            };
+            let mut n = decide_at(trial);
+            // A cycle (see the module docs): past the limit the contact may close or begin
+            // to slide, but neither open nor lock again in this attempt. Kept from
+            // opening, it is decided as closed with no normal force, so that it holds no
+            // shear beyond the band.
+            let cycling =
+                n.state != c.state && self.scratch.flips.get(k).is_some_and(|&f| f >= CYCLE_LIMIT);
+            if cycling && c.state.is_closed() && !n.state.is_closed() {
+                n = decide_at(Trial { d: 0.0, ..trial });
+            } else if cycling && c.state == ContactState::Sliding && n.state == ContactState::Locked
+            {
+                n = Contact {
+                    normal_force: n.normal_force,
+                    ..c
+                };
+            }
+            if n.state != c.state
+                && let Some(f) = self.scratch.flips.get_mut(k)
+            {
+                *f = f.saturating_add(1);
+            }
             if n.state != c.state || n.slide_dir != c.slide_dir {
                 changed += 1;
                 self.scratch.flipped.push(k as u32);

@@ -41,6 +41,8 @@ impl Simulation {
             return;
         }
         let mut watch = Stopwatch::start();
+        // The prediction is no iteration of the attempt: its changes are not counted.
+        self.scratch.flips.clear();
         self.collect_springs();
         self.scratch.system.clear_rhs();
         self.assemble_rhs();
@@ -61,6 +63,9 @@ impl Simulation {
         rec: &mut StepRecord,
     ) -> Result<(bool, u32), SimError> {
         let max_oci = self.model.params.max_oci;
+        // Each attempt counts its contacts' changes afresh (see `contact_law`).
+        self.scratch.flips.clear();
+        self.scratch.flips.resize(self.state.contacts.len(), 0);
         for it in 1..=max_oci {
             self.solve_states(rec)?;
             let mut watch = Stopwatch::start();

@@ -94,6 +94,8 @@ pub(crate) struct Scratch {
     pub(crate) motions: Vec<Motion>,
     /// Contacts whose state changed in the last OCI iteration (for a diagnosis).
     pub(crate) flipped: Vec<u32>,
+    /// Changes of state of each contact in this attempt's open-close iteration.
+    pub(crate) flips: Vec<u8>,
     /// Each block's force scale for the contact law's decisions: the magnitude of the
     /// external force on it (weight and point loads); infinite for a fixed block.
     pub(crate) force_scale: Vec<f64>,
@@ -262,6 +264,7 @@ impl Simulation {
                 d: vec![[0.0; 6]; n],
                 motions: Vec::with_capacity(n),
                 flipped: Vec::new(),
+                flips: Vec::new(),
                 force_scale: Vec::new(),
                 diagnosis: None,
                 gains: Vec::new(),
