@@ -164,10 +164,6 @@ struct Job {
     quiet: bool,
 }
 
-fn io_err(e: std::io::Error, what: &Path) -> Failure {
-    output_error(e, what)
-}
-
 /// Runs `dda run`.
 pub fn run(args: RunArgs) -> Result<ExitCode, Failure> {
     let source = args
@@ -203,10 +199,11 @@ pub fn run(args: RunArgs) -> Result<ExitCode, Failure> {
         write_new(&work.join("scene.json"), &(scene_json + "\n"))?;
         let history_path = work.join("history.csv");
         let frames_path = work.join("frames.jsonl");
-        let history =
-            BufWriter::new(File::create(&history_path).map_err(|e| io_err(e, &history_path))?);
+        let history = BufWriter::new(
+            File::create(&history_path).map_err(|e| output_error(e, &history_path))?,
+        );
         let frames =
-            BufWriter::new(File::create(&frames_path).map_err(|e| io_err(e, &frames_path))?);
+            BufWriter::new(File::create(&frames_path).map_err(|e| output_error(e, &frames_path))?);
         Ok((history, frames))
     })();
     let (history, frames) = match started {
@@ -349,12 +346,11 @@ impl Job {
     /// up (see [`Staging::abandon`]) before reporting it.
     fn finish(
         self,
-        work: impl FnOnce(&mut Job) -> Result<Outcome, Failure>,
+        work: impl FnOnce(&mut Job) -> Result<ExitCode, Failure>,
     ) -> Result<ExitCode, Failure> {
         let mut job = self;
         match work(&mut job) {
-            Ok(Outcome::Published(code)) => Ok(code),
-            Ok(Outcome::Interrupted(code)) => Ok(code),
+            Ok(code) => Ok(code),
             Err(e) => {
                 let Job { staging, .. } = job;
                 staging.abandon();
@@ -392,7 +388,7 @@ impl Job {
 
     fn write_history(&mut self, line: &str) -> Result<(), Failure> {
         let path = self.work.join("history.csv");
-        writeln!(self.history, "{line}").map_err(|e| io_err(e, &path))?;
+        writeln!(self.history, "{line}").map_err(|e| output_error(e, &path))?;
         self.marks.history_bytes += line.len() as u64 + 1;
         Ok(())
     }
@@ -403,7 +399,7 @@ impl Job {
         let frame = Frame::of(&self.sim, svg, self.resolution);
         let line = serde_json::to_string(&frame)
             .map_err(|e| Failure::Output(format!("cannot serialise a frame: {e}")))?;
-        writeln!(self.frames, "{line}").map_err(|e| io_err(e, &path))?;
+        writeln!(self.frames, "{line}").map_err(|e| output_error(e, &path))?;
         self.marks.frames_bytes += line.len() as u64 + 1;
         Ok(())
     }
@@ -437,9 +433,11 @@ impl Job {
             (&mut self.frames, "frames.jsonl"),
         ] {
             let path = self.work.join(name);
-            w.flush().map_err(|e| io_err(e, &path))?;
+            w.flush().map_err(|e| output_error(e, &path))?;
             if sync {
-                w.get_ref().sync_data().map_err(|e| io_err(e, &path))?;
+                w.get_ref()
+                    .sync_data()
+                    .map_err(|e| output_error(e, &path))?;
             }
         }
         Ok(())
@@ -459,7 +457,7 @@ impl Job {
     /// Steps to the end, a failure, the step limit or a signal. At a signal, saves a
     /// checkpoint and leaves the run in its staging folder for `dda resume`; otherwise
     /// writes the summary and the report and moves the outputs into place.
-    fn drive(&mut self) -> Result<Outcome, Failure> {
+    fn drive(&mut self) -> Result<ExitCode, Failure> {
         let bar = if !self.quiet && std::io::stderr().is_terminal() {
             let bar = ProgressBar::new(1000);
             bar.set_style(
@@ -521,7 +519,7 @@ impl Job {
                 self.sim.totals().steps,
                 self.out.display()
             );
-            return Ok(Outcome::Interrupted(ExitCode::from((128 + sig) as u8)));
+            return Ok(ExitCode::from((128 + sig) as u8));
         }
         let (status, error) = match &end {
             End::Done => ("completed", None),
@@ -548,7 +546,7 @@ impl Job {
         let published_checkpoint = self.out.join(CHECKPOINT_FILE);
         if error.is_none() && published_checkpoint.exists() {
             std::fs::remove_file(&published_checkpoint)
-                .map_err(|e| io_err(e, &published_checkpoint))?;
+                .map_err(|e| output_error(e, &published_checkpoint))?;
         }
 
         if !self.quiet {
@@ -590,9 +588,9 @@ impl Job {
                     self.out.join(CHECKPOINT_FILE).display(),
                     self.out.join("summary.json").display()
                 );
-                Ok(Outcome::Published(ExitCode::from(1)))
+                Ok(ExitCode::from(1))
             }
-            None => Ok(Outcome::Published(ExitCode::SUCCESS)),
+            None => Ok(ExitCode::SUCCESS),
         }
     }
 }
@@ -607,10 +605,4 @@ enum End {
     Stopped(String),
     /// A signal arrived.
     Signal(i32),
-}
-
-/// What a job left: published outputs, or an interrupted run in its staging folder.
-enum Outcome {
-    Published(ExitCode),
-    Interrupted(ExitCode),
 }

@@ -75,12 +75,18 @@ impl Violation {
 /// 1/2 v^T M v.
 pub fn kinetic(mass: &Mat6, v: &Vec6) -> f64 {
     let mut e = 0.0;
+    add_kinetic(&mut e, mass, v);
+    e
+}
+
+/// Adds 1/2 v^T M v to `e`, term by term (a run's total adds its blocks' terms in one
+/// sum, in this order, so that history.csv's column stays the same to the bit).
+pub fn add_kinetic(e: &mut f64, mass: &Mat6, v: &Vec6) {
     for a in 0..6 {
         for b in 0..6 {
-            e += 0.5 * v[a] * mass[a][b] * v[b];
+            *e += 0.5 * v[a] * mass[a][b] * v[b];
         }
     }
-    e
 }
 
 /// Strain energy of a block of area `area` under stress `s` (sx, sy, txy), with the

@@ -3,6 +3,7 @@
 //! constant-acceleration scheme.
 
 use crate::diagnosis::SimError;
+use crate::guard::add_kinetic;
 use crate::kinematics::{elasticity, mass_matrix};
 use crate::scene::Mode;
 use crate::simulation::Simulation;
@@ -82,12 +83,7 @@ impl Simulation {
             }
             let mat = self.model.materials[self.model.blocks[i].material];
             let m = mass_matrix(&b.polygon.moments(), mat.density);
-            let v = &b.velocity;
-            for a in 0..6 {
-                for bb in 0..6 {
-                    e += 0.5 * v[a] * m[a][bb] * v[bb];
-                }
-            }
+            add_kinetic(&mut e, &m, &b.velocity);
         }
         e
     }
