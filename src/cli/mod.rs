@@ -93,7 +93,7 @@ pub fn main() -> ExitCode {
                 } else {
                     ""
                 };
-                println!("{:<width$}  {}{mark}", b.name, b.description);
+                say(format_args!("{:<width$}  {}{mark}", b.name, b.description));
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -167,14 +167,21 @@ fn check(name: &str) -> Result<ExitCode, Failure> {
     let Resolved { scene, lines } = resolve_scene(Some(name))?;
     let model = validate(&scene, name, lines.as_ref())?;
     let effects = dda_core::Effects::of(&model);
-    println!(
+    say(format_args!(
         "{name}: ok: scene `{}`, {} blocks, detector {}, effects: {}",
         model.name,
         model.blocks.len(),
         model.params.detector,
         effects.names().join(", ")
-    );
+    ));
     Ok(ExitCode::SUCCESS)
+}
+
+/// Writes a line to standard output. A reader that has gone (`dda scenes | head`) is not
+/// an error of ours: the rest is dropped quietly instead of panicking as `println!` does.
+fn say(line: std::fmt::Arguments) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stdout().lock(), "{line}");
 }
 
 /// The default output directory of a scene: `runs/` and its name, with characters other

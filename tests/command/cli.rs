@@ -5,7 +5,7 @@
 #![allow(clippy::unwrap_used)]
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Command, Output, Stdio};
 
 const SCENE: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
@@ -1080,5 +1080,24 @@ fn write_failures_exit_1_naming_the_path_and_leave_nothing_behind() {
         assert_eq!(o.status.code(), Some(1), "{blocks}: {err}");
         assert!(err.contains(".fsize") && err.contains("too large"), "{err}");
         assert_eq!(listing(&dir), ["afile"], "{blocks}");
+    }
+}
+
+/// A reader that has gone before `dda` writes (`dda scenes | head -0`) ends the listing
+/// quietly: exit 0 and no panic, where `println!` panicked on the broken pipe.
+#[test]
+fn a_closed_standard_output_is_not_a_panic() {
+    for args in [&["scenes"][..], &["check", "paper-5.1a-column-20"][..]] {
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        let o = Command::new(env!("CARGO_BIN_EXE_dda"))
+            .args(args)
+            .stdout(writer)
+            .stderr(Stdio::piped())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {err}");
     }
 }

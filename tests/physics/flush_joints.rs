@@ -73,6 +73,16 @@ fn settlement(m: &Masonry, courses: usize) -> f64 {
     2.0 * per_course * n * (n + 1.0) / 2.0 / (2.0 * m.penalty)
 }
 
+/// A bound on how far the ends of a structure of `courses` courses move apart sideways:
+/// its bottom course carries the weight of the whole height H, stress rho g H, and
+/// expands sideways by nu rho g H / E (plane stress, nu 0.25, E 1 GPa), so each end of a
+/// structure of span S moves out by that strain times S / 2; the blocks and springs start
+/// unloaded, so the first expansion overshoots by up to a factor 2.
+fn spread(m: &Masonry, courses: usize) -> f64 {
+    let height = courses as f64 * m.height;
+    2.0 * 0.25 * 2600.0 * 9.81 * height / 1e9 * m.span() / 2.0
+}
+
 /// Any layout of at most 400 blocks.
 fn layout() -> impl Strategy<Value = Layout> {
     prop_oneof![
@@ -117,18 +127,31 @@ fn structure() -> impl Strategy<Value = Masonry> {
 }
 
 proptest! {
-    #![proptest_config(support::config(10))]
+    #![proptest_config(support::config(40))]
 
-    /// On a flat base every structure runs without dt collapsing and stands: no block
-    /// moves across by more than its settlement bound, nor along the base by 5 mm.
+    /// On a flat base every structure runs without dt collapsing, and, where friction
+    /// holds it (5 deg or more, the tilted test's limit of little friction), stands: no
+    /// block moves across by more than its settlement bound, nor along the base by more
+    /// than its Poisson spread and 5 mm. (Nothing holds a frictionless structure's blocks
+    /// sideways against their Poisson expansion: a 14 x 16 grid of 1.9 x 1 m blocks spread
+    /// by 15 mm in 0.2 s, by 0.7 mm with nu = 0.)
     #[test]
     fn structures_on_a_flat_base_stand(m in structure()) {
-        let r = run(&m);
-        prop_assert!(r.min_dt_ratio >= 1e-3, "{m:?}: dt fell to {:e} of dt0", r.min_dt_ratio);
-        prop_assert!(r.moved_along < 5e-3, "{m:?}: moved {} m along the base", r.moved_along);
-        let bound = 5e-3 + settlement(&m, courses(m.layout));
-        prop_assert!(r.moved_across < bound, "{m:?}: settled {} m (bound {bound})", r.moved_across);
+        let (r, detector) = (run(&m), "cover");
+        prop_assert!(r.min_dt_ratio >= 1e-3, "{detector} {m:?}: dt fell to {:e} of dt0", r.min_dt_ratio);
+        if m.friction_deg >= 5.0 {
+            let n = courses(m.layout);
+            let bound = 5e-3 + spread(&m, n);
+            prop_assert!(r.moved_along < bound, "{detector} {m:?}: moved {} m along the base (bound {bound})", r.moved_along);
+            let bound = 5e-3 + settlement(&m, n);
+            prop_assert!(r.moved_across < bound, "{detector} {m:?}: settled {} m (bound {bound})", r.moved_across);
+        }
     }
+
+}
+
+proptest! {
+    #![proptest_config(support::config(10))]
 
     /// On a base tilted 15 deg a structure no taller than it is wide holds when its
     /// friction is ample (45 deg: tan 45 is more than twice tan 15, so that even the
@@ -162,22 +185,13 @@ proptest! {
     }
 }
 
-/// The issue's structures stand for 1 s (largest block movement under 5 mm): the 106-block
-/// running-bond wall with shear penalty p / 2.5 with every detector, and a 10 x 20 grid
-/// of 0.5 m blocks with the cover detector and type-1. (Type-2 does not hold the grid:
-/// its vertex-vertex contacts where four corners meet create energy, `docs/method.md`
-/// section 6. The 411-block walls are measured there too.)
+/// The issue's structures stand for 1 s (largest block movement under 5 mm) with every
+/// detector: the 106-block running-bond wall with shear penalty p / 2.5 and a 10 x 20 grid
+/// of 0.5 m blocks. (The 411-block walls are measured in `docs/method.md` section 6.)
 #[test]
 fn the_issue_wall_and_grid_stand_for_a_second() {
-    let cases = [
-        (
-            Masonry::wall(10, 10, 2.5),
-            &["cover", "type-1", "type-2"][..],
-        ),
-        (Masonry::grid(10, 20, 0.5), &["cover", "type-1"][..]),
-    ];
-    for (m, detectors) in cases {
-        for &detector in detectors {
+    for m in [Masonry::wall(10, 10, 2.5), Masonry::grid(10, 20, 0.5)] {
+        for detector in ["cover", "type-1", "type-2"] {
             let r = run_with(&m, detector);
             assert!(
                 r.min_dt_ratio >= 1e-3,

@@ -74,6 +74,12 @@ pub struct Contact {
     /// Compressive normal force of the last solve, N (positive pushing the blocks apart),
     /// kept by the engine for the friction of a sliding contact.
     pub normal_force: f64,
+    /// Whether the contact stands for two vertices meeting (a vertex-vertex contact of a
+    /// conventional detector, resolved to one entrance edge): it carries a normal spring
+    /// only, with no shear spring, friction, cohesion or tension, as in Shi's code (two
+    /// corners have no contact length, and the entrance edge chosen is only one of two).
+    #[serde(default)]
+    pub vertex_vertex: bool,
 }
 
 impl Contact {
@@ -94,6 +100,7 @@ impl Contact {
             slide_dir: 0.0,
             bonded: false,
             normal_force: 0.0,
+            vertex_vertex: false,
         }
     }
 }

@@ -102,12 +102,11 @@ impl TerritoryDetector {
                     if self.in_vertex_territory(a, es, j, tol2) {
                         // Resolve a vertex pair the same way from either side (lower block
                         // first), so a pair found twice gives one contact.
-                        let c = if vb < eb {
-                            resolve_vertex_pair(vs, vb, i, es, eb, j, sin_e)
+                        if vb < eb {
+                            resolve_vertex_pair(vs, vb, i, es, eb, j, sin_e, out);
                         } else {
-                            resolve_vertex_pair(es, eb, j, vs, vb, i, sin_e)
-                        };
-                        out.extend(c);
+                            resolve_vertex_pair(es, eb, j, vs, vb, i, sin_e, out);
+                        }
                     }
                 }
             }
@@ -137,9 +136,16 @@ impl TerritoryDetector {
     }
 }
 
-/// Shi's local rule for the vertex pair (vertex `i` of `p`, vertex `j` of `q`): of the
-/// pairs (vertex i, each edge at j) and (vertex j, each edge at i) passing the entrance
-/// filter, the one with the largest d_n.
+/// Shi's local rule for the vertex pair (vertex `i` of `p`, vertex `j` of `q`), its
+/// contacts appended to `out`:
+/// - where an edge at one vertex faces an edge at the other, anti-parallel within
+///   theta_e, the two corners are the ends of an edge-edge contact: the vertex whose next
+///   edge is in the flush pair touches the other block's previous edge (one vertex-edge
+///   contact per flush pair, the same whichever block is `p`, with shear and friction);
+/// - otherwise the pair is a vertex-vertex contact: of the pairs (vertex i, each edge at
+///   j) and (vertex j, each edge at i) passing the entrance filter, the one with the
+///   largest d_n, marked [`Contact::vertex_vertex`] (a normal spring only).
+#[allow(clippy::too_many_arguments)]
 fn resolve_vertex_pair(
     p: &BlockShape,
     pb: u32,
@@ -148,11 +154,36 @@ fn resolve_vertex_pair(
     qb: u32,
     j: usize,
     sin_e: f64,
-) -> Option<Contact> {
+    out: &mut Vec<Contact>,
+) {
+    let contact = |vs: &BlockShape, vb: u32, v: usize, es: &BlockShape, eb: u32, e: usize| {
+        let m = VertexEdge::new(vs.vertices[v], es.vertices[e], es.vertices[es.next(e)]);
+        let key = ContactKey {
+            vertex_block: vb,
+            vertex: v as u32,
+            edge_block: eb,
+            edge: e as u32,
+        };
+        Contact::new(key, m.d_n, m.r, true)
+    };
+    let flush = |a: DVec2, b: DVec2| a.dot(b) < 0.0 && a.perp_dot(b).abs() <= sin_e;
+    let (ip, jp) = (p.prev(i), q.prev(j));
+    let mut edge_edge = false;
+    if flush(p.tangents[i], q.tangents[jp]) {
+        out.push(contact(p, pb, i, q, qb, jp));
+        edge_edge = true;
+    }
+    if flush(p.tangents[ip], q.tangents[j]) {
+        out.push(contact(q, qb, j, p, pb, ip));
+        edge_edge = true;
+    }
+    if edge_edge {
+        return;
+    }
     let candidates = [
-        (p, pb, i, q, qb, q.prev(j)),
+        (p, pb, i, q, qb, jp),
         (p, pb, i, q, qb, j),
-        (q, qb, j, p, pb, p.prev(i)),
+        (q, qb, j, p, pb, ip),
         (q, qb, j, p, pb, i),
     ];
     let mut best: Option<Contact> = None;
@@ -161,18 +192,15 @@ fn resolve_vertex_pair(
         if !entrance_filter(e_prev, e_next, es.normal(e), sin_e) {
             continue;
         }
-        let m = VertexEdge::new(vs.vertices[v], es.vertices[e], es.vertices[es.next(e)]);
-        if best.is_none_or(|b| m.d_n > b.d_n) {
-            let key = ContactKey {
-                vertex_block: vb,
-                vertex: v as u32,
-                edge_block: eb,
-                edge: e as u32,
-            };
-            best = Some(Contact::new(key, m.d_n, m.r, true));
+        let c = contact(vs, vb, v, es, eb, e);
+        if best.is_none_or(|b| c.d_n > b.d_n) {
+            best = Some(c);
         }
     }
-    best
+    out.extend(best.map(|c| Contact {
+        vertex_vertex: true,
+        ..c
+    }));
 }
 
 impl ContactDetector for TerritoryDetector {
@@ -196,9 +224,10 @@ impl ContactDetector for TerritoryDetector {
         // Disk territories are symmetric: vertex pairs were all found from A's side.
         let again = self.territory == Territory::NormalBounded;
         self.classify(b, ids.b, a, ids.a, params, again, out);
-        // A vertex pair and an edge territory may name the same vertex-edge pair.
+        // A vertex pair and an edge territory may name the same vertex-edge pair: the
+        // vertex is then in the edge's territory, and the contact is a vertex-edge one.
         let mine = &mut out[start..];
-        mine.sort_unstable_by_key(|c| c.key);
+        mine.sort_unstable_by_key(|c| (c.key, c.vertex_vertex));
         let mut keep = start;
         for k in start..out.len() {
             if k == start || out[k].key != out[keep - 1].key {
@@ -207,7 +236,33 @@ impl ContactDetector for TerritoryDetector {
             }
         }
         out.truncate(keep);
+        shortest_exit(out, start);
     }
+}
+
+/// Keeps, of the contacts of one vertex behind the lines of several edges of the other
+/// block (those of `out[start..]`, sorted by key), only the one it is least deep behind:
+/// a vertex inside a block near its corner leaves it by the shortest exit, as Shi's rule
+/// decides for a vertex pair, rather than be pushed out through two faces at once (and a
+/// second contact appearing already penetrated would release energy never stored).
+fn shortest_exit(out: &mut Vec<Contact>, start: usize) {
+    let mut keep = start;
+    let mut k = start;
+    while k < out.len() {
+        let vertex = |c: &Contact| (c.key.vertex_block, c.key.vertex);
+        let end = k + out[k..].partition_point(|c| vertex(c) == vertex(&out[k]));
+        let exit = (k..end)
+            .filter(|&m| out[m].d_n < 0.0)
+            .max_by(|&a, &b| out[a].d_n.total_cmp(&out[b].d_n).then(b.cmp(&a)));
+        for m in k..end {
+            if out[m].d_n >= 0.0 || Some(m) == exit {
+                out[keep] = out[m];
+                keep += 1;
+            }
+        }
+        k = end;
+    }
+    out.truncate(keep);
 }
 
 #[cfg(test)]
@@ -281,8 +336,113 @@ mod tests {
         let a = shape(&[[0.0, 1.02], [0.98, 1.02], [0.98, 2.0], [0.0, 2.0]]);
         let b = shape(&[[1.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 1.0]]);
         for det in [TerritoryDetector::type1(), TerritoryDetector::type2()] {
-            let got = run(det, &a, &b, 0.1);
+            let got = contacts(det, &a, &b, 0.1);
             assert_eq!(got.len(), 1, "{}: {got:?}", det.name());
+            // No edge at one corner runs along an edge at the other: a vertex-vertex
+            // contact, a normal spring only.
+            assert!(got[0].vertex_vertex, "{}: {got:?}", det.name());
+        }
+    }
+
+    fn contacts(det: TerritoryDetector, a: &BlockShape, b: &BlockShape, tol: f64) -> Vec<Contact> {
+        let mut out = Vec::new();
+        let params = DetectionParams::new(tol, 2f64.to_radians());
+        det.detect_pair(a, b, IDS, &params, &mut out);
+        out
+    }
+
+    #[test]
+    fn a_flush_joint_is_an_edge_edge_contact_from_either_side() {
+        // Two unit squares side by side, A's right edge (1) on B's left edge (3), B moved
+        // 1e-4 right and up, so that each corner of the joint lies in the other's vertex
+        // territory for both detectors. The joint's two ends are vertex-edge contacts with
+        // shear: at the top B's corner 3 on A's edge 1, at the bottom A's corner 1 on B's
+        // edge 3 (each corner whose next edge runs along the other's previous edge), and
+        // none is a vertex-vertex contact.
+        // Type-1's disks also hold the corners with B turned by 1 degree about the joint's
+        // middle (within theta_e = 4 degrees of flush).
+        let a = shape(&[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]);
+        let b_at = |deg: f64| {
+            let (sin, cos) = deg.to_radians().sin_cos();
+            let pivot = DVec2::new(1.0, 0.5);
+            let pts: Vec<[f64; 2]> = [[1.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 1.0]]
+                .iter()
+                .map(|&[x, y]| {
+                    let w = DVec2::new(x, y) - pivot;
+                    let p = pivot + DVec2::new(cos * w.x - sin * w.y, sin * w.x + cos * w.y);
+                    [p.x + 1e-4, p.y + 1e-4]
+                })
+                .collect();
+            shape(&pts)
+        };
+        let cases = [
+            (TerritoryDetector::type1(), 0.0),
+            (TerritoryDetector::type1(), 1.0),
+            (TerritoryDetector::type2(), 0.0),
+        ];
+        for (det, deg) in cases {
+            let b = b_at(deg);
+            let got = contacts(det, &a, &b, 0.02);
+            let mut keys: Vec<_> = got.iter().map(|c| tuple(c.key)).collect();
+            keys.sort_unstable();
+            // Type-2's edge bands reach the corners too (r in [0, 1]): there each corner
+            // also lies in the band of the other block's edge of the joint.
+            let expected: &[_] = match det.territory() {
+                Territory::Distance => &[(0, 1, 1, 3), (1, 3, 0, 1)],
+                Territory::NormalBounded => {
+                    &[(0, 1, 1, 3), (0, 2, 1, 3), (1, 0, 0, 1), (1, 3, 0, 1)]
+                }
+            };
+            assert_eq!(keys, expected, "{} {deg}", det.name());
+            assert!(
+                got.iter().all(|c| !c.vertex_vertex),
+                "{}: {got:?}",
+                det.name()
+            );
+            // The same contacts, mirrored, with the blocks swapped.
+            let mut swapped: Vec<_> = contacts(det, &b, &a, 0.02)
+                .iter()
+                .map(|c| {
+                    let (vb, v, eb, e) = tuple(c.key);
+                    (1 - vb, v, 1 - eb, e)
+                })
+                .collect();
+            swapped.sort_unstable();
+            assert_eq!(keys, swapped, "{} {deg}", det.name());
+        }
+    }
+
+    #[test]
+    fn a_vertex_inside_a_corner_leaves_by_the_shortest_exit() {
+        // B's lower-left corner 0.001 below A's top edge (2) and 0.003 left of A's right
+        // edge (1), and so A's upper-right corner 0.001 above B's bottom edge (0) and
+        // 0.003 right of B's left edge (3): each corner is behind both lines and in both
+        // edges' bands (type-2) or the pair in each other's disk (type-1). No corner is
+        // pushed out through the far face: every contact behind its line is on the top or
+        // bottom edge, 0.001 deep, and no vertex has two.
+        let a = shape(&[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]);
+        let b = shape(&[
+            [0.997, 0.999],
+            [1.997, 0.999],
+            [1.997, 1.999],
+            [0.997, 1.999],
+        ]);
+        for det in [TerritoryDetector::type1(), TerritoryDetector::type2()] {
+            let got = contacts(det, &a, &b, 0.02);
+            let behind: Vec<_> = got.iter().filter(|c| c.d_n < 0.0).collect();
+            assert!(!behind.is_empty(), "{}", det.name());
+            for c in &behind {
+                let (vb, _, _, e) = tuple(c.key);
+                assert_eq!(e, if vb == 1 { 2 } else { 0 }, "{}: {got:?}", det.name());
+                assert!((c.d_n + 0.001).abs() < 1e-12, "{}: {c:?}", det.name());
+            }
+            let mut vertices: Vec<_> = behind
+                .iter()
+                .map(|c| tuple(c.key))
+                .map(|k| (k.0, k.1))
+                .collect();
+            vertices.dedup();
+            assert_eq!(vertices.len(), behind.len(), "{}: {got:?}", det.name());
         }
     }
 }

@@ -98,13 +98,22 @@ impl Simulation {
             .for_each(terms);
     }
 
-    /// The joint of a contact.
+    /// The joint of a contact: that of its blocks' materials, or none (no friction,
+    /// cohesion or tension) for a vertex-vertex contact, which carries a normal spring
+    /// only (`Contact::vertex_vertex`).
     pub(crate) fn joint(&self, k: usize) -> JointProps {
-        let key = self.state.contacts.contacts[k].key;
+        let c = &self.state.contacts.contacts[k];
+        if c.vertex_vertex {
+            return JointProps {
+                tan_phi: 0.0,
+                cohesion: 0.0,
+                tensile_strength: 0.0,
+            };
+        }
         let m = |b: u32| self.material[b as usize] as usize;
         *self
             .model
-            .joint_of_materials(m(key.vertex_block), m(key.edge_block))
+            .joint_of_materials(m(c.key.vertex_block), m(c.key.edge_block))
     }
 
     /// Sets the half step of every block for an attempt of size `dt` and the contacts'
