@@ -4,6 +4,7 @@
 
 pub mod analytic;
 pub mod builtin;
+pub mod collapse;
 pub mod column;
 pub mod hard_cases;
 pub mod layout;
@@ -12,6 +13,7 @@ pub mod paper;
 pub mod verdict;
 
 pub use self::builtin::{BUILTINS, Builtin, DEFAULT_BUILTIN, builtin};
+pub use self::collapse::{CollapseWatch, ENERGY_MARGIN, SPEED_FACTOR, Worst, potential_energy};
 pub use self::column::{ColumnError, ColumnSpec, column_scene, jointed_column, paper_analysis};
 pub use self::hard_cases::{HARD_CASES, HardCase, collision_scene};
 pub use self::masonry::{Layout, Masonry};
