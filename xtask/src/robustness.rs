@@ -126,10 +126,13 @@ pub fn run(root: &Path) -> Result<(), String> {
            A block over 12 kg at 5 m/s could not be stopped within d_tol by any detector\n\
            (p d_tol^2 / 2 = 150 J); ours is stopped within it, so the type-based detectors\n\
            do not lose the contact either.\n\
-         - **4.1 TB-CD-2.** The paper found TB-CD-2 right here; ours throws A back up,\n\
-           spinning, with several times its initial energy (see the picture). We have not\n\
-           traced which territory decision causes it; it is the first thing to look at\n\
-           when the type-based detectors are revisited.\n\n\
+         - **4.1 and 4.4a TB-CD-1.** Our type-based detectors resolve vertex pairs as\n\
+           Shi's code does and give no vertex outside the other block a contact behind an\n\
+           edge's line (`docs/method.md`, section 5). Before those rules TB-CD-1 threw A\n\
+           out of both collisions, spinning, with 490 to 113,000 times its initial energy,\n\
+           as the paper found; with them it is right. (They also made 4.1 TB-CD-2 right,\n\
+           as the paper found it.) The paper's own type-based code is not published, so\n\
+           which of its decisions failed there is not known.\n\n\
          Reproduce: `cargo xtask robustness` (a few seconds).\n",
         if disagreements.is_empty() {
             "none".to_string()
