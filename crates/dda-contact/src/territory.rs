@@ -96,16 +96,23 @@ impl TerritoryDetector {
         let tol = params.d_tol;
         let tol2 = tol * tol;
         let sin_e = params.sin_theta_e();
+        let slack = OUTSIDE * tol;
         for (i, a) in vs.vertices_near(es, tol) {
             if with_vertex_pairs {
                 for j in 0..es.len() {
-                    if self.in_vertex_territory(a, es, j, tol2) {
+                    // Corners within d_tol whose edges run along each other are the ends
+                    // of an edge-edge contact, whatever the territories say (Shi's code
+                    // finds vertex pairs by distance): type-2's bands end at the normals
+                    // of an edge's end, and a joint's corner would flicker across them.
+                    let ends = (a - es.vertices[j]).length_squared() <= tol2
+                        && flush_corners(vs, i, es, j, sin_e);
+                    if ends || self.in_vertex_territory(a, es, j, tol2) {
                         // Resolve a vertex pair the same way from either side (lower block
                         // first), so a pair found twice gives one contact.
                         if vb < eb {
-                            resolve_vertex_pair(vs, vb, i, es, eb, j, sin_e, out);
+                            resolve_vertex_pair(vs, vb, i, es, eb, j, sin_e, slack, out);
                         } else {
-                            resolve_vertex_pair(es, eb, j, vs, vb, i, sin_e, out);
+                            resolve_vertex_pair(es, eb, j, vs, vb, i, sin_e, slack, out);
                         }
                     }
                 }
@@ -140,10 +147,10 @@ impl TerritoryDetector {
 /// contacts appended to `out`:
 /// - where an edge at one vertex faces an edge at the other, anti-parallel within
 ///   theta_e, the two corners are the ends of an edge-edge contact: the corner lying on
-///   the other's edge (its projection ratio in [0, 1]) touches that edge, or, if both
-///   do, the vertex whose next edge is in the flush pair touches the other block's
-///   previous edge (one vertex-edge contact per flush pair, the same whichever block is
-///   `p`, with shear and friction);
+///   the other's edge (its projection ratio in [0, 1]) touches that edge; if both do,
+///   the deeper behind it, and if they are as deep, the vertex whose next edge is in the
+///   flush pair touches the other block's previous edge (one vertex-edge contact per
+///   flush pair, the same whichever block is `p`, with shear and friction);
 /// - otherwise the pair is a vertex-vertex contact: of the pairs (vertex i, each edge at
 ///   j) and (vertex j, each edge at i) passing the entrance filter, the one with the
 ///   largest d_n, marked [`Contact::vertex_vertex`] (a normal spring only).
@@ -156,6 +163,7 @@ fn resolve_vertex_pair(
     qb: u32,
     j: usize,
     sin_e: f64,
+    slack: f64,
     out: &mut Vec<Contact>,
 ) {
     let contact = |vs: &BlockShape, vb: u32, v: usize, es: &BlockShape, eb: u32, e: usize| {
@@ -168,15 +176,25 @@ fn resolve_vertex_pair(
         };
         Contact::new(key, m.d_n, m.r, true)
     };
-    let flush = |a: DVec2, b: DVec2| a.dot(b) < 0.0 && a.perp_dot(b).abs() <= sin_e;
-    // Of a flush pair's two corners, the one on the other's edge (r in [0, 1]) holds the
-    // joint's end; the other lies beyond that edge's end. Coincident, the first.
-    let end_of = |first: Contact, second: Contact| {
-        let on = |c: &Contact| (0.0..=1.0).contains(&c.r);
-        if on(&first) || !on(&second) {
-            first
+    let flush = |a: DVec2, b: DVec2| flush_edges(a, b, sin_e);
+    // Of a flush pair's two corners, the one inside the other block holds the joint's
+    // end (a wedge's tip turning into its neighbour), the other being clear of it; both
+    // or neither inside, the one on the other's edge (r in [0, 1]; the other lies beyond
+    // that edge's end), then the one deeper behind it. Equal, the first.
+    let inside = |c: &Contact| {
+        let (vs, es) = if c.key.vertex_block == pb {
+            (p, q)
         } else {
-            second
+            (q, p)
+        };
+        !outside(vs.vertices[c.key.vertex as usize], es, slack)
+    };
+    let end_of = |first: Contact, second: Contact| {
+        let rank = |c: &Contact| (inside(c), (0.0..=1.0).contains(&c.r));
+        match rank(&second).cmp(&rank(&first)) {
+            std::cmp::Ordering::Greater => second,
+            std::cmp::Ordering::Equal if second.d_n < first.d_n => second,
+            _ => first,
         }
     };
     let (ip, jp) = (p.prev(i), q.prev(j));
@@ -263,6 +281,24 @@ impl ContactDetector for TerritoryDetector {
 /// over d_tol: blocks cut from one rock touch to rounding (as the contact law's band).
 const OUTSIDE: f64 = 1e-9;
 
+/// Whether edge directions `a` and `b` are anti-parallel within theta_e (`sin_e` its sine).
+fn flush_edges(a: DVec2, b: DVec2, sin_e: f64) -> bool {
+    a.dot(b) < 0.0 && a.perp_dot(b).abs() <= sin_e
+}
+
+/// Whether an edge at vertex `i` of `p` runs along an edge at vertex `j` of `q` (the
+/// next edge of one anti-parallel to the previous edge of the other).
+fn flush_corners(p: &BlockShape, i: usize, q: &BlockShape, j: usize, sin_e: f64) -> bool {
+    flush_edges(p.tangents[i], q.tangents[q.prev(j)], sin_e)
+        || flush_edges(p.tangents[p.prev(i)], q.tangents[j], sin_e)
+}
+
+/// Whether `p` is outside `s`: in front of the line of one of its edges by more than
+/// `slack`.
+fn outside(p: DVec2, s: &BlockShape, slack: f64) -> bool {
+    (0..s.len()).any(|j| s.normal(j).dot(p - s.vertices[j]) > slack)
+}
+
 /// Settles the contacts of each vertex behind edges' lines (those of `out[start..]`,
 /// sorted by key; `shape` gives a block's shape by id):
 /// - a vertex outside the other block (in front of the line of one of its edges by more
@@ -287,8 +323,7 @@ fn exits<'s>(
         let end = k + out[k..].partition_point(|c| vertex(c) == vertex(&out[k]));
         let key = out[k].key;
         let (vs, es) = (shape(key.vertex_block), shape(key.edge_block));
-        let p = vs.vertices[key.vertex as usize];
-        let outside = (0..es.len()).any(|j| es.normal(j).dot(p - es.vertices[j]) > slack);
+        let outside = outside(vs.vertices[key.vertex as usize], es, slack);
         let exit = (k..end)
             .filter(|&m| out[m].d_n < 0.0 && !outside)
             .max_by(|&a, &b| out[a].d_n.total_cmp(&out[b].d_n).then(b.cmp(&a)));
