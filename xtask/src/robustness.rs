@@ -105,7 +105,7 @@ pub fn run(root: &Path) -> Result<(), String> {
          parameters of Tables 1 and 2) is run with each detector, and the outcome is judged\n\
          by the criteria in `crates/dda-bench/src/verdict.rs`: the run completes without\n\
          NaN; the blocks' geometric overlap stays below d_tol; A ends apart and moving away\n\
-         from B, or at rest on it; kinetic plus elastic energy never rises more than 1%;\n\
+         from B, or at rest on it; kinetic plus elastic energy never rises more than 0.2%;\n\
          no spin beyond that energy. \"Paper\" is the paper's verdict from its text.\n\n\
          **{agree} of {total} verdicts agree with the paper.** {cover}\n\n\
          | case | detector | paper | ours | agree | max overlap (mm) | final velocity of A (m/s) | criteria not met | |\n\
