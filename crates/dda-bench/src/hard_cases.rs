@@ -144,6 +144,33 @@ impl HardCase {
     /// The scene: A moving at `speed` in -y onto fixed B.
     pub fn scene(&self) -> Scene {
         let [a, b] = (self.geometry)();
+        self.scene_of(a, b)
+    }
+
+    /// The scene with A's approach changed: A shifted by `dx` in x and turned by
+    /// `turn_deg` (counter-clockwise) about its lowest vertex, which keeps its height.
+    /// The paper gives its configurations only as figures; these variants show how a
+    /// verdict depends on the one chosen.
+    pub fn scene_moved(&self, dx: f64, turn_deg: f64) -> Scene {
+        let [a, b] = (self.geometry)();
+        let pivot = a
+            .iter()
+            .copied()
+            .min_by(|p, q| p[1].total_cmp(&q[1]))
+            .unwrap_or([0.0, 0.0]);
+        let (s, c) = turn_deg.to_radians().sin_cos();
+        let a = a
+            .iter()
+            .map(|p| {
+                let (x, y) = (p[0] - pivot[0], p[1] - pivot[1]);
+                [pivot[0] + c * x - s * y + dx, pivot[1] + s * x + c * y]
+            })
+            .collect();
+        self.scene_of(a, b)
+    }
+
+    /// The scene of A (vertices `a`) moving at `speed` in -y onto fixed B (`b`).
+    fn scene_of(&self, a: Vec<[f64; 2]>, b: Vec<[f64; 2]>) -> Scene {
         collision_scene(
             &self.name(),
             a,
@@ -302,6 +329,35 @@ mod tests {
             // Apart at the start.
             let gap = a.aabb().min.y - b.aabb().max.y;
             assert!(gap > 0.0 || c.slug == "flat-polygons", "{}", c.case);
+        }
+    }
+
+    /// A moved approach keeps A's shape and its lowest vertex's height, shifted by dx:
+    /// every edge length is kept to rounding, and the lowest vertex moves by dx only.
+    #[test]
+    fn a_moved_approach_turns_a_about_its_lowest_vertex() {
+        for c in HARD_CASES {
+            let a0 = c.scene().blocks[0].vertices.clone();
+            let a1 = c.scene_moved(0.01, 2.0).blocks[0].vertices.clone();
+            let low = |a: &[[f64; 2]]| {
+                a.iter()
+                    .copied()
+                    .min_by(|p, q| p[1].total_cmp(&q[1]))
+                    .unwrap()
+            };
+            let len = |a: &[[f64; 2]], k: usize| {
+                let (p, q) = (a[k], a[(k + 1) % a.len()]);
+                (q[0] - p[0]).hypot(q[1] - p[1])
+            };
+            for k in 0..a0.len() {
+                assert!((len(&a0, k) - len(&a1, k)).abs() < 1e-12, "{}", c.case);
+            }
+            let (l0, l1) = (low(&a0), low(&a1));
+            let pivot = a1[a0.iter().position(|p| *p == l0).unwrap()];
+            assert!((pivot[0] - l0[0] - 0.01).abs() < 1e-12 && (pivot[1] - l0[1]).abs() < 1e-12);
+            // The pivot keeps its height, so the lowest vertex is no higher than before
+            // (it may be another one after the turn).
+            assert!(l1[1] <= l0[1] + 1e-12, "{}", c.case);
         }
     }
 }
