@@ -1,6 +1,7 @@
 //! Built-in scenes: runnable without a file (`dda run NAME`, `dda scenes`).
 
 use crate::hard_cases::HARD_CASES;
+use crate::masonry::Masonry;
 use crate::paper::PAPER_COLUMNS;
 use dda_core::Scene;
 
@@ -18,8 +19,9 @@ pub struct Builtin {
 /// The scene `dda run` runs when given none.
 pub const DEFAULT_BUILTIN: &str = "paper-5.1b-column-93";
 
-/// All built-in scenes: the paper's section 4 hard cases and section 5 columns.
-pub const BUILTINS: [Builtin; 11] = [
+/// All built-in scenes: the paper's section 4 hard cases and section 5 columns, then
+/// structures on flush joints (running-bond walls and a grid of equal blocks).
+pub const BUILTINS: [Builtin; 15] = [
     Builtin {
         name: "paper-4.1-sharp-corners",
         description: "paper 4.1: triangles with 11.4 deg tips, A at 1 m/s onto fixed B \
@@ -85,6 +87,29 @@ pub const BUILTINS: [Builtin; 11] = [
                       826 blocks, frictionless, 1 s (Table 3)",
         build: || PAPER_COLUMNS[3].scene(),
     },
+    Builtin {
+        name: "wall-106",
+        description: "running-bond brick wall, 10 courses of 10 bricks of 1 x 0.5 m (106 \
+                      blocks) on a fixed base, friction 35 deg, shear penalty p/2.5, 1 s",
+        build: || Masonry::wall(10, 10, 2.5).scene("wall-106"),
+    },
+    Builtin {
+        name: "wall-411",
+        description: "running-bond brick wall, 20 courses of 20 bricks (411 blocks), shear \
+                      penalty p/2.5, 1 s",
+        build: || Masonry::wall(20, 20, 2.5).scene("wall-411"),
+    },
+    Builtin {
+        name: "wall-411-stiff-shear",
+        description: "the 411-block wall with shear penalty p, 1 s",
+        build: || Masonry::wall(20, 20, 1.0).scene("wall-411-stiff-shear"),
+    },
+    Builtin {
+        name: "grid-201",
+        description: "a 10 x 20 grid of 0.5 m blocks (X-junctions at every corner) on a \
+                      fixed base, friction 35 deg, 1 s",
+        build: || Masonry::grid(10, 20, 0.5).scene("grid-201"),
+    },
 ];
 
 /// The built-in scene called `name`.
@@ -112,6 +137,7 @@ mod tests {
             .iter()
             .map(|c| c.name())
             .chain(PAPER_COLUMNS.iter().map(|c| c.name()))
+            .chain(["wall-106", "wall-411", "wall-411-stiff-shear", "grid-201"].map(String::from))
             .collect();
         assert_eq!(BUILTINS.map(|b| b.name.to_string()).to_vec(), names);
         assert!(builtin("nope").is_none());
