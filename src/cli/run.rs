@@ -365,11 +365,13 @@ impl Job {
         }
         let sim = &self.sim;
         let p = &sim.model().params;
+        let fixed = sim.model().blocks.iter().filter(|b| b.fixed).count();
         eprintln!(
-            "{what} `{}` at t = {} s: {} blocks ({} unknowns), detector {}, d_tol {} m, d_max {} m",
+            "{what} `{}` at t = {} s: {} blocks and {fixed} fixed ({} unknowns), detector {}, \
+             d_tol {} m, d_max {} m",
             sim.model().name,
             sim.time(),
-            sim.blocks().len(),
+            sim.blocks().len() - fixed,
             sim.unknowns(),
             sim.detector_name(),
             p.d_tol,

@@ -1101,3 +1101,21 @@ fn a_closed_standard_output_is_not_a_panic() {
         assert_eq!(o.status.code(), Some(0), "{args:?}: {err}");
     }
 }
+
+/// The terminal counts the free blocks and the fixed ones apart: the 20-block column
+/// stands on a fixed base, 21 blocks in all.
+#[test]
+fn the_terminal_counts_free_and_fixed_blocks_apart() {
+    let dir = scratch("counts");
+    let out = dir.join("out");
+    let o = dda(&[
+        "run",
+        "paper-5.1a-column-20",
+        "--max-steps",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains(": 20 blocks and 1 fixed ("), "{err}");
+}
