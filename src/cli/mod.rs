@@ -1,5 +1,5 @@
 //! Command-line interface: `dda run`, `dda resume`, `dda render`, `dda check`,
-//! `dda scenes`.
+//! `dda build`, `dda scenes`.
 //!
 //! Exit codes (`docs/cli.md`):
 //! - 0: done;
@@ -48,6 +48,14 @@ enum Command {
         /// Scene file or built-in name.
         scene: String,
     },
+    /// Write a scene with its regions cut into blocks: every block listed (JSON).
+    Build {
+        /// Scene file or built-in name.
+        scene: String,
+        /// File to write (a new one: never replaced); default: standard output.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// List the built-in scenes.
     Scenes,
 }
@@ -81,6 +89,7 @@ pub fn main() -> ExitCode {
         Command::Resume(args) => run::resume(args),
         Command::Render { dir } => render::render(&dir),
         Command::Check { scene } => check(&scene),
+        Command::Build { scene, out } => build(&scene, out.as_deref()),
         Command::Scenes => {
             let width = dda_bench::BUILTINS
                 .iter()
@@ -174,6 +183,40 @@ fn check(name: &str) -> Result<ExitCode, Failure> {
         model.params.detector,
         effects.names().join(", ")
     ));
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `dda build`: validates the scene (errors as `dda check` gives them), cuts its regions
+/// into blocks and writes the explicit scene as JSON to `out` (a new file) or stdout.
+fn build(name: &str, out: Option<&Path>) -> Result<ExitCode, Failure> {
+    let Resolved { scene, lines } = resolve_scene(Some(name))?;
+    validate(&scene, name, lines.as_ref())?;
+    let explicit = scene
+        .expanded()
+        .map_err(|v| bad(format!("{name}: key `{}`: {}", v.key, v.message)))?;
+    let text = serde_json::to_string_pretty(&explicit)
+        .map_err(|e| Failure::Output(format!("cannot serialise the scene: {e}")))?
+        + "\n";
+    match out {
+        None => {
+            use std::io::Write;
+            let _ = std::io::stdout().lock().write_all(text.as_bytes());
+        }
+        Some(path) => {
+            if path.exists() {
+                return Err(bad(format!(
+                    "{}: exists; `dda build` never replaces a file (name a new one)",
+                    path.display()
+                )));
+            }
+            render::write_new(path, &text)?;
+            eprintln!(
+                "wrote {} ({} blocks)",
+                path.display(),
+                explicit.blocks.len()
+            );
+        }
+    }
     Ok(ExitCode::SUCCESS)
 }
 

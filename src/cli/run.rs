@@ -194,7 +194,12 @@ pub fn run(args: RunArgs) -> Result<ExitCode, Failure> {
     let work = staging.dir.clone();
     // From here on the staging folder is ours: an output failure removes it.
     let started = (|| {
-        let scene_json = serde_json::to_string_pretty(&scene)
+        // The scene as run, its regions cut into the blocks run: `dda run` of it repeats
+        // the run.
+        let explicit = scene
+            .expanded()
+            .map_err(|v| bad(format!("key `{}`: {}", v.key, v.message)))?;
+        let scene_json = serde_json::to_string_pretty(&explicit)
             .map_err(|e| Failure::Output(format!("cannot serialise the scene: {e}")))?;
         write_new(&work.join("scene.json"), &(scene_json + "\n"))?;
         let history_path = work.join("history.csv");

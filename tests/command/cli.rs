@@ -1119,3 +1119,81 @@ fn the_terminal_counts_free_and_fixed_blocks_apart() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains(": 20 blocks and 1 fixed ("), "{err}");
 }
+
+const SLOPE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/tests/scenes/jointed-slope.toml"
+);
+
+/// `dda build` writes the scene with its regions cut into blocks, every block listed, and
+/// never replaces a file; the run of a scene with regions records the same explicit
+/// scene, which runs again to the same history.
+#[test]
+fn build_writes_the_explicit_scene_and_a_run_records_it() {
+    let dir = scratch("build");
+    let built = dir.join("built.json");
+    let o = dda(&["build", SLOPE, "--out", built.to_str().unwrap()]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let text = std::fs::read_to_string(&built).unwrap();
+    let explicit: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert!(explicit.get("regions").is_none() && explicit.get("joint_sets").is_none());
+    let ids: Vec<&str> = explicit["blocks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|b| b["id"].as_str().unwrap())
+        .collect();
+    assert_eq!(ids[0], "base.1");
+    assert!(ids.contains(&"slope.1") && ids.len() > 20, "{ids:?}");
+    // Never replaced: exit 2, the file as it was.
+    let again = dda(&["build", SLOPE, "--out", built.to_str().unwrap()]);
+    assert_eq!(again.status.code(), Some(2));
+    assert_eq!(std::fs::read_to_string(&built).unwrap(), text);
+    // A short run records the explicit scene; running that repeats the history.
+    let short = dir.join("short.toml");
+    let scene = std::fs::read_to_string(SLOPE)
+        .unwrap()
+        .replace("duration = 0.5", "duration = 0.01");
+    std::fs::write(&short, scene).unwrap();
+    let (first, second) = (dir.join("first"), dir.join("second"));
+    let o = dda(&[
+        "run",
+        short.to_str().unwrap(),
+        "--out",
+        first.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let recorded = first.join("scene.json");
+    let recorded_text = std::fs::read_to_string(&recorded).unwrap();
+    assert!(!recorded_text.contains("\"regions\""));
+    let o = dda(&[
+        "run",
+        recorded.to_str().unwrap(),
+        "--out",
+        second.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let history = |d: &Path| -> Vec<String> {
+        std::fs::read_to_string(d.join("history.csv"))
+            .unwrap()
+            .lines()
+            .map(|l| l.split(',').take(10).collect::<Vec<_>>().join(","))
+            .collect()
+    };
+    assert_eq!(history(&first), history(&second));
+}

@@ -54,6 +54,8 @@ fn scene(name: &str, analysis: Analysis, friction_deg: f64, blocks: Vec<BlockSpe
             },
         )]),
         blocks,
+        joint_sets: BTreeMap::new(),
+        regions: Vec::new(),
     }
 }
 

@@ -82,6 +82,8 @@ pub fn column_scene(name: &str, blocks: &[ConvexPolygon], analysis: Analysis) ->
         materials: rock(2600.0, 1e9, 0.3),
         joints: BTreeMap::from([("default".into(), Joint::default())]),
         blocks: specs,
+        joint_sets: BTreeMap::new(),
+        regions: Vec::new(),
     }
 }
 

@@ -207,6 +207,8 @@ pub fn collision_scene(
         materials: rock(2000.0, 1e9, 0.25),
         joints: BTreeMap::from([("default".into(), Joint::default())]),
         blocks: vec![block("A", a, false), block("B", b, true)],
+        joint_sets: BTreeMap::new(),
+        regions: Vec::new(),
     }
 }
 

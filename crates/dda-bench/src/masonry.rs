@@ -165,6 +165,8 @@ impl Masonry {
                 },
             )]),
             blocks,
+            joint_sets: BTreeMap::new(),
+            regions: Vec::new(),
         }
     }
 }

@@ -22,6 +22,7 @@ mod locate;
 mod model;
 mod open_close;
 mod pattern;
+mod regions;
 pub mod scene;
 pub mod simulation;
 pub mod solver;

@@ -132,3 +132,7 @@ pub const FORCE: Range = Range {
 /// Nesting depth of arrays and tables beyond which a scene file is refused before it
 /// is parsed (a scene needs 4: `blocks[i].loads[j].at`).
 pub const MAX_NESTING: usize = 64;
+/// Most blocks the `[[regions]]` of a scene may be cut into, estimated before cutting
+/// from the joints crossing each region (a spacing typed in mm for m would otherwise
+/// cut for hours and exhaust memory).
+pub const MAX_REGION_BLOCKS: f64 = 1e6;

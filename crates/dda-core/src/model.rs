@@ -8,8 +8,31 @@ use dda_geom::{ConvexPolygon, DVec2, PolygonError, PolygonOptions, separation};
 use std::collections::BTreeMap;
 
 impl Scene {
-    /// Checks every value and builds the model the engine runs.
+    /// Checks every value and builds the model the engine runs; regions are cut into
+    /// their blocks first (`regions::expand`), and the pieces their `min_area` dropped
+    /// are reported as warnings.
     pub fn validate(&self) -> Result<Model, Invalid> {
+        if self.regions.is_empty() && self.joint_sets.is_empty() {
+            return self.validate_blocks();
+        }
+        let (scene, dropped) = crate::regions::expand(self)?;
+        let mut model = scene.validate_blocks()?;
+        for (i, n, area) in dropped.slivers {
+            model.warnings.push(invalid(
+                format!("regions[{i}].min_area"),
+                format!("{n} pieces below min_area dropped ({area:.3e} m^2 in all)"),
+            ));
+        }
+        Ok(model)
+    }
+
+    /// The scene with its regions cut into blocks: what `dda build` writes.
+    pub fn expanded(&self) -> Result<Scene, Invalid> {
+        crate::regions::expand(self).map(|(scene, _)| scene)
+    }
+
+    /// [`Scene::validate`] of a scene whose blocks are all explicit.
+    fn validate_blocks(&self) -> Result<Model, Invalid> {
         if self.name.trim().is_empty() {
             return Err(invalid("name", "must not be empty"));
         }
@@ -459,22 +482,7 @@ pub struct ModelBlock {
 
 impl BlockSpec {
     fn validate(&self, key: &str, material: usize) -> Result<ModelBlock, Invalid> {
-        for (i, v) in self.vertices.iter().enumerate() {
-            each_within(&format!("{key}.vertices[{i}]"), v, &limits::COORDINATE)?;
-        }
-        // Strict: clockwise order and collinear vertices are reported, not repaired.
-        let coords: Vec<DVec2> = self.vertices.iter().map(|&c| DVec2::from(c)).collect();
-        let polygon = ConvexPolygon::with_options(coords, &PolygonOptions::strict())
-            .map(|(p, _)| p)
-            .map_err(|e| {
-                let at = match e {
-                    PolygonError::DuplicateVertex { vertex, .. }
-                    | PolygonError::CollinearVertex { vertex }
-                    | PolygonError::NotConvex { vertex } => format!("{key}.vertices[{vertex}]"),
-                    _ => format!("{key}.vertices"),
-                };
-                invalid(at, format!("block `{}`: {e}", self.id))
-            })?;
+        let polygon = outline(key, &self.vertices, |e| format!("block `{}`: {e}", self.id))?;
         let mut velocity = [0.0; 6];
         if let Some(v) = &self.velocity {
             each_within(&format!("{key}.velocity"), v, &limits::SPEED)?;
@@ -543,4 +551,30 @@ impl Model {
     pub fn joint_of_materials(&self, ma: usize, mb: usize) -> &JointProps {
         &self.joints[self.joint_of[ma * self.materials.len() + mb] as usize]
     }
+}
+
+/// The convex polygon of the outline `vertices` at `key` (each coordinate within
+/// `limits::COORDINATE`); strict: clockwise order and collinear vertices are reported,
+/// not repaired. An error names the vertex where it can, with `message` of the polygon
+/// error.
+pub(crate) fn outline(
+    key: &str,
+    vertices: &[[f64; 2]],
+    message: impl Fn(&PolygonError) -> String,
+) -> Result<ConvexPolygon, Invalid> {
+    for (i, v) in vertices.iter().enumerate() {
+        each_within(&format!("{key}.vertices[{i}]"), v, &limits::COORDINATE)?;
+    }
+    let coords: Vec<DVec2> = vertices.iter().map(|&c| DVec2::from(c)).collect();
+    ConvexPolygon::with_options(coords, &PolygonOptions::strict())
+        .map(|(p, _)| p)
+        .map_err(|e| {
+            let at = match e {
+                PolygonError::DuplicateVertex { vertex, .. }
+                | PolygonError::CollinearVertex { vertex }
+                | PolygonError::NotConvex { vertex } => format!("{key}.vertices[{vertex}]"),
+                _ => format!("{key}.vertices"),
+            };
+            invalid(at, message(&e))
+        })
 }

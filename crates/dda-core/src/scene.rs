@@ -27,6 +27,49 @@ pub struct Scene {
     /// The blocks.
     #[serde(default)]
     pub blocks: Vec<BlockSpec>,
+    /// Joint sets by name, for regions to be cut by.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub joint_sets: BTreeMap<String, JointSetSpec>,
+    /// Regions of rock cut by joint sets into blocks.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub regions: Vec<RegionSpec>,
+}
+
+/// A `[joint_sets.NAME]` entry: a family of parallel, persistent joints.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointSetSpec {
+    /// Direction of the joint lines, degrees counter-clockwise from +x.
+    pub dip_deg: f64,
+    /// Normal distance between neighbouring joints, m.
+    pub spacing: f64,
+    /// Position of one joint along the set's normal (-sin dip, cos dip), m.
+    #[serde(default)]
+    pub offset: f64,
+}
+
+/// A `[[regions]]` entry: a convex outline filled with one material and cut by joint
+/// sets into blocks named `ID.1`, `ID.2`, ...
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RegionSpec {
+    /// Region id: its blocks are named after it.
+    pub id: String,
+    /// Material name.
+    pub material: String,
+    /// Outline `[x, y]`, counter-clockwise, convex.
+    #[serde(deserialize_with = "exact::list")]
+    pub vertices: Vec<[f64; 2]>,
+    /// Names of the joint sets cutting it (none: the region is one block).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub joint_sets: Vec<String>,
+    /// Whether its blocks are fixed.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub fixed: bool,
+    /// Pieces smaller than this, m^2, are dropped and reported (default 1e-9 of the
+    /// region's area: slivers of rounding).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_area: Option<f64>,
 }
 
 /// Dynamic (inertia carried from step to step) or static (velocities zeroed each step).

@@ -99,6 +99,8 @@ fn free_fall_is_exact() {
         materials: rock(2600.0, 1e9),
         joints: BTreeMap::new(),
         blocks: vec![b],
+        joint_sets: Default::default(),
+        regions: Vec::new(),
     };
     let sim = run(&scene);
     let t = sim.time();
@@ -142,6 +144,8 @@ fn incline_scene(deg: f64, friction_deg: f64) -> (Scene, glam::DVec2) {
         materials: rock(2600.0, 1e9),
         joints: joint(friction_deg),
         blocks: vec![base, slider],
+        joint_sets: Default::default(),
+        regions: Vec::new(),
     };
     (scene, u)
 }
@@ -197,6 +201,8 @@ fn collision_scene() -> Scene {
         materials: rock(2600.0, 1e9),
         joints: joint(0.0),
         blocks: vec![a, b],
+        joint_sets: Default::default(),
+        regions: Vec::new(),
     }
 }
 
@@ -281,6 +287,8 @@ fn stack_of_ten_blocks_stands() {
         materials: rock(2600.0, 1e10),
         joints: joint(30.0),
         blocks,
+        joint_sets: Default::default(),
+        regions: Vec::new(),
     };
     let starts: Vec<_> = scene
         .validate()

@@ -1,0 +1,214 @@
+//! Rock masses from a scene file: `[[regions]]` cut by `[joint_sets]` into blocks that
+//! tile the region, named after it, and every bad region or set refused with its key and
+//! line.
+
+// A panic is how a test reports failure.
+#![allow(clippy::unwrap_used)]
+
+use dda_core::scene::{JointSetSpec, RegionSpec};
+use dda_core::{Format, Scene, SceneError};
+use dda_geom::{ConvexPolygon, separation};
+use proptest::prelude::*;
+
+const SLOPE: &str = include_str!("../../../tests/scenes/jointed-slope.toml");
+
+fn error(text: &str) -> SceneError {
+    match Scene::parse(text, Format::Toml, "slope.toml") {
+        Ok(_) => panic!("accepted a bad scene:\n{text}"),
+        Err(e) => e,
+    }
+}
+
+/// The 1-based line of `text` starting with `from`, the `nth` such line (from 0).
+fn line_of(text: &str, from: &str, nth: usize) -> usize {
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| l.starts_with(from))
+        .nth(nth)
+        .unwrap()
+        .0
+        + 1
+}
+
+#[test]
+fn a_region_is_cut_into_blocks_named_after_it() {
+    let (scene, model) = Scene::parse(SLOPE, Format::Toml, "slope.toml").unwrap();
+    let explicit = scene.expanded().unwrap();
+    assert!(explicit.regions.is_empty() && explicit.joint_sets.is_empty());
+    assert_eq!(explicit.blocks.len(), model.blocks.len());
+    // The base (no joint sets) is one block; the slope's are slope.1, slope.2, ...
+    assert_eq!(explicit.blocks[0].id, "base.1");
+    assert!(explicit.blocks[0].fixed);
+    let slope: Vec<_> = explicit
+        .blocks
+        .iter()
+        .filter(|b| b.id.starts_with("slope."))
+        .collect();
+    assert!(slope.len() > 20, "{} blocks", slope.len());
+    for (k, b) in slope.iter().enumerate() {
+        assert_eq!(b.id, format!("slope.{}", k + 1));
+        assert!(!b.fixed);
+    }
+    // The slope's blocks fill its outline: 40 x 12 m less a triangle 25 x 12 / 2.
+    let area: f64 = slope
+        .iter()
+        .map(|b| ConvexPolygon::from_coords(&b.vertices).unwrap().area())
+        .sum();
+    let outline = 40.0 * 12.0 - 25.0 * 12.0 / 2.0;
+    assert!(
+        (area - outline).abs() < 1e-12 * outline,
+        "{area} vs {outline}"
+    );
+}
+
+#[test]
+fn bad_regions_and_sets_are_named_with_key_and_line() {
+    let cases: [(&str, &str, &str, &str, usize); 5] = [
+        // (line to replace, replacement, expected key, words in the message, nth line)
+        (
+            "joint_sets = [\"bedding\", \"cross\"]",
+            "joint_sets = [\"bedding\", \"crosss\"]",
+            "regions[1].joint_sets[1]",
+            "no joint set named `crosss`",
+            0,
+        ),
+        (
+            "spacing = 2.0",
+            "spacing = 0.0",
+            "joint_sets.bedding.spacing",
+            "positive",
+            0,
+        ),
+        (
+            "vertices = [[0.0, 0.0], [40.0, 0.0]",
+            "vertices = [[0.0, 0.0], [40.0, 0.0], [40.0, 12.0], [30.0, 5.0], [25.0, 12.0]]",
+            "regions[1].vertices[3]",
+            "convex",
+            0,
+        ),
+        (
+            "vertices = [[0.0, 0.0], [40.0, 0.0]",
+            "vertices = [[0.0, -1.0], [40.0, -1.0], [40.0, 12.0], [25.0, 12.0]]",
+            "regions[1].vertices",
+            "overlaps region `base`",
+            0,
+        ),
+        (
+            "spacing = 3.0",
+            "spacing = 1e-4",
+            "regions[1].joint_sets",
+            "wrong unit",
+            0,
+        ),
+    ];
+    for (from, to, key, words, nth) in cases {
+        let line = line_of(SLOPE, from, nth);
+        let text: String = SLOPE
+            .lines()
+            .enumerate()
+            .map(|(k, l)| if k + 1 == line { to } else { l })
+            .collect::<Vec<_>>()
+            .join("\n");
+        let e = error(&text);
+        assert_eq!(e.key, key, "{e}");
+        assert!(e.message.contains(words), "{e}");
+        assert!(e.line.is_some(), "{e}");
+    }
+}
+
+/// A random convex polygon: `n` points on an ellipse of semi-axes `a`, `b`, turned by
+/// `turn`, at random angles (sorted), so counter-clockwise and convex.
+fn region() -> impl Strategy<Value = Vec<[f64; 2]>> {
+    (
+        3usize..=40,
+        1.0f64..20.0,
+        1.0f64..20.0,
+        0.0f64..6.3,
+        any::<u64>(),
+    )
+        .prop_map(|(n, a, b, turn, seed)| {
+            let mut state = seed | 1;
+            let mut angles: Vec<f64> = (0..n)
+                .map(|_| {
+                    state ^= state << 13;
+                    state ^= state >> 7;
+                    state ^= state << 17;
+                    (state >> 11) as f64 / (1u64 << 53) as f64 * std::f64::consts::TAU
+                })
+                .collect();
+            angles.sort_by(f64::total_cmp);
+            angles.dedup_by(|x, y| (*x - *y).abs() < 0.05);
+            let (s, c) = turn.sin_cos();
+            angles
+                .iter()
+                .map(|t| {
+                    let (x, y) = (a * t.cos(), b * t.sin());
+                    [c * x - s * y, s * x + c * y]
+                })
+                .collect()
+        })
+}
+
+fn set() -> impl Strategy<Value = JointSetSpec> {
+    (-90.0f64..270.0, 0.3f64..5.0, -3.0f64..3.0).prop_map(|(dip_deg, spacing, offset)| {
+        JointSetSpec {
+            dip_deg,
+            spacing,
+            offset,
+        }
+    })
+}
+
+proptest! {
+    #![proptest_config(dda_geom::test_support::config(200))]
+
+    /// Random convex regions (3 to 40 vertices) cut by 1 to 3 sets: the blocks tile the
+    /// region (their areas and the dropped slivers' sum to its area, to 1e-12
+    /// relative), no two overlap, and each is a valid convex, counter-clockwise polygon.
+    #[test]
+    fn blocks_tile_the_region(outline in region(), sets in prop::collection::vec(set(), 1..=3)) {
+        prop_assume!(outline.len() >= 3);
+        let Ok(shape) = ConvexPolygon::from_coords(&outline) else {
+            return Err(TestCaseError::reject("not a valid outline"));
+        };
+        let mut scene = Scene::parse(SLOPE, Format::Toml, "slope.toml").unwrap().0;
+        scene.regions.truncate(0);
+        scene.joint_sets.clear();
+        let names: Vec<String> = (0..sets.len()).map(|k| format!("s{k}")).collect();
+        for (name, s) in names.iter().zip(&sets) {
+            scene.joint_sets.insert(name.clone(), s.clone());
+        }
+        scene.regions.push(RegionSpec {
+            id: "r".into(),
+            material: "rock".into(),
+            vertices: outline.clone(),
+            joint_sets: names,
+            fixed: false,
+            min_area: Some(0.0),
+        });
+        let explicit = scene.expanded().unwrap();
+        let blocks: Vec<ConvexPolygon> = explicit
+            .blocks
+            .iter()
+            .map(|b| ConvexPolygon::from_coords(&b.vertices).unwrap())
+            .collect();
+        let area: f64 = blocks.iter().map(|b| b.area()).sum();
+        prop_assert!((area - shape.area()).abs() <= 1e-12 * shape.area(),
+            "{} blocks: {area} vs {}", blocks.len(), shape.area());
+        for b in &blocks {
+            prop_assert!(b.area() > 0.0);
+            let v = b.vertices();
+            for k in 0..v.len() {
+                let (p, q, r) = (v[k], v[(k + 1) % v.len()], v[(k + 2) % v.len()]);
+                prop_assert!((q - p).perp_dot(r - q) > 0.0, "not convex and counter-clockwise");
+            }
+        }
+        let scale = shape.diameter();
+        for i in 0..blocks.len() {
+            for j in i + 1..blocks.len() {
+                let depth = -separation(&blocks[i], &blocks[j]).0;
+                prop_assert!(depth <= 1e-9 * scale, "blocks {i} and {j} overlap by {depth}");
+            }
+        }
+    }
+}
