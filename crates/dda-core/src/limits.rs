@@ -136,3 +136,7 @@ pub const MAX_NESTING: usize = 64;
 /// from the joints crossing each region (a spacing typed in mm for m would otherwise
 /// cut for hours and exhaust memory).
 pub const MAX_REGION_BLOCKS: f64 = 1e6;
+/// How far two blocks may overlap at the start, m (or 1e-9 of their size, if larger):
+/// coordinates written to 6 decimals (in m) move each vertex by at most 0.71e-6 m, so
+/// two blocks that share a face may overlap by up to 1.4e-6 m as written.
+pub const START_OVERLAP: f64 = 2e-6;

@@ -131,7 +131,7 @@ impl Scene {
         if params.mode == Mode::Static {
             check_static_support(&blocks, params.d_tol)?;
         }
-        let mut warnings = Vec::new();
+        let mut warnings = unit_slips(self);
         if params.d_tol < 2.0 * params.d_max {
             warnings.push(invalid(
                 "analysis.contact_tolerance",
@@ -155,8 +155,9 @@ impl Scene {
     }
 }
 
-/// Rejects blocks that overlap at the start (beyond rounding: blocks cut from one rock
-/// share faces exactly); two fixed blocks may overlap, as they never interact.
+/// Rejects blocks that overlap at the start by more than coordinates written by hand
+/// round to (`limits::START_OVERLAP`, or 1e-9 of their size if larger); two fixed blocks
+/// may overlap, as they never interact.
 fn check_start_overlaps(blocks: &[ModelBlock]) -> Result<(), Invalid> {
     let boxes: Vec<_> = blocks.iter().map(|b| b.polygon.aabb()).collect();
     let mut pairs = Vec::new();
@@ -168,11 +169,14 @@ fn check_start_overlaps(blocks: &[ModelBlock]) -> Result<(), Invalid> {
         }
         let (gap, _) = separation(&a.polygon, &b.polygon);
         let size = a.polygon.diameter().max(b.polygon.diameter());
-        if gap < -1e-9 * size {
+        let allowed = limits::START_OVERLAP.max(1e-9 * size);
+        if gap < -allowed {
             return Err(invalid(
                 format!("blocks[{}].vertices", q.b),
                 format!(
-                    "block `{}` overlaps block `{}` by {:.3e} m at the start",
+                    "block `{}` overlaps block `{}` by {:.3e} m at the start (more than \
+                     {allowed:.1e} m): move it clear, or, where the two share a face, write \
+                     the shared vertices with the same numbers in both",
                     b.id, a.id, -gap
                 ),
             ));
@@ -577,4 +581,45 @@ pub(crate) fn outline(
             };
             invalid(at, message(&e))
         })
+}
+
+/// Warnings for values that are admissible but look like a slip of units: a Young's
+/// modulus below 1e5 Pa (written in MPa or GPa), a density below 100 or above 20,000
+/// kg/m^3 (t/m^3, or g/cm^3 x 1000 twice), a friction angle between 0 and 1 degree (a
+/// ratio tan(phi) written as the angle).
+fn unit_slips(scene: &Scene) -> Vec<Invalid> {
+    let mut out = Vec::new();
+    for (name, m) in &scene.materials {
+        let key = format!("materials.{name}");
+        if let Some(e) = m.young
+            && e < 1e5
+        {
+            out.push(invalid(
+                format!("{key}.young"),
+                format!(
+                    "{e} Pa is softer than any rock or soil: is it in MPa or GPa? (Pa expected)"
+                ),
+            ));
+        }
+        if !(100.0..=20_000.0).contains(&m.density) {
+            out.push(invalid(
+                format!("{key}.density"),
+                format!("{} kg/m^3 is unlike any rock (about 1,500 to 3,500): is it in t/m^3 or g/cm^3? (kg/m^3 expected)", m.density),
+            ));
+        }
+    }
+    for (name, j) in &scene.joints {
+        if j.friction_deg > 0.0 && j.friction_deg <= 1.0 {
+            out.push(invalid(
+                format!("joints.{name}.friction_deg"),
+                format!(
+                    "{} degrees is almost frictionless: is it tan(phi)? (the angle in degrees expected; tan(phi) = {} is {:.1} degrees)",
+                    j.friction_deg,
+                    j.friction_deg,
+                    j.friction_deg.atan().to_degrees()
+                ),
+            ));
+        }
+    }
+    out
 }

@@ -291,3 +291,64 @@ fn json_errors_name_key_and_line() {
     assert!(e.message.contains("timestep"), "{e}");
     assert_eq!(e.line, Some(5), "{e}");
 }
+
+/// Two 1 m blocks sharing a face whose coordinates, written by hand to 6 decimals, differ
+/// in the last digit (1.000000 in one, 0.999999 in the other): they overlap by 1e-6 m,
+/// which is accepted; 1e-4 m into each other they are refused, with what to do.
+#[test]
+fn blocks_written_to_six_decimals_may_share_a_face() {
+    let scene = |x: &str| {
+        format!(
+            "name = \"pair\"\n[analysis]\nduration = 0.1\ntime_step = 0.01\n\
+             max_displacement = 0.01\nnormal_penalty = 1e9\n\
+             [materials.rock]\ndensity = 2600.0\nyoung = 1e9\npoisson = 0.25\n\
+             [[blocks]]\nid = \"a\"\nmaterial = \"rock\"\n\
+             vertices = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]\n\
+             [[blocks]]\nid = \"b\"\nmaterial = \"rock\"\n\
+             vertices = [[{x}, 0.0], [2.0, 0.0], [2.0, 1.0], [{x}, 1.0]]\n"
+        )
+    };
+    Scene::parse(&scene("0.999999"), Format::Toml, "pair.toml").expect("a shared face");
+    let e = error_of(&scene("0.9999"));
+    assert_eq!(e.key, "blocks[1].vertices", "{e}");
+    assert!(
+        e.message.contains("overlaps block `a`") && e.message.contains("move it clear"),
+        "{e}"
+    );
+}
+
+fn error_of(text: &str) -> SceneError {
+    match Scene::parse(text, Format::Toml, "pair.toml") {
+        Ok(_) => panic!("accepted overlapping blocks:\n{text}"),
+        Err(e) => e,
+    }
+}
+
+/// Values that are admissible but look like a slip of units are warned of, with the key:
+/// Young's modulus in MPa (5000 for 5e9 Pa), density in t/m^3 (2.6), friction as tan(phi)
+/// (0.6); the scene still runs.
+#[test]
+fn unit_slips_are_warned_of_with_their_keys() {
+    let text = GOOD
+        .lines()
+        .map(|l| {
+            if l.starts_with("young") {
+                "young = 5000.0".to_string()
+            } else if l.starts_with("density") {
+                "density = 2.6".to_string()
+            } else if l.starts_with("friction_deg") {
+                "friction_deg = 0.6".to_string()
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let (_, model) = Scene::parse(&text, Format::Toml, "scene.toml").expect("admissible");
+    let keys: Vec<&str> = model.warnings.iter().map(|w| w.key.as_str()).collect();
+    for key in ["young", "density", "friction_deg"] {
+        assert!(keys.iter().any(|k| k.ends_with(key)), "{key}: {keys:?}");
+    }
+    let (_, good) = Scene::parse(GOOD, Format::Toml, "scene.toml").unwrap();
+    assert!(good.warnings.is_empty(), "{:?}", good.warnings);
+}
