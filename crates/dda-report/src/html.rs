@@ -21,7 +21,7 @@ pub struct HistoryRow {
     pub active_contacts: f64,
     /// Largest penetration after the step, m.
     pub max_penetration: f64,
-    /// Kinetic energy after the step, J.
+    /// Kinetic energy after the step, J/m (per metre of thickness: the model is 2D).
     pub kinetic_energy: f64,
 }
 
@@ -188,7 +188,7 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
     for (title, ylabel, f) in [
         (
             "Kinetic energy",
-            "J",
+            "J/m",
             (|r: &HistoryRow| r.kinetic_energy) as fn(&HistoryRow) -> f64,
         ),
         ("Time step", "dt (s)", |r: &HistoryRow| r.dt),
