@@ -1,5 +1,5 @@
 //! The engine's physics across the layers: the paper's section 4 hard cases with every
-//! detector (reviewed snapshots), its two-set columns with every detector, random hard pairs, structures on flush joints, and
+//! detector (reviewed snapshots), its two-set columns with every detector, a jointed slope written as a region, random hard pairs, structures on flush joints, and
 //! bit-identical resume and thread counts. One test binary, so that the suite links once
 //! for all of them.
 
@@ -7,4 +7,5 @@ mod columns;
 mod flush_joints;
 mod hard_cases;
 mod hard_pairs;
+mod regions;
 mod resume;
