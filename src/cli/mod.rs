@@ -21,6 +21,7 @@ mod signals;
 
 use clap::{Parser, Subcommand};
 use dda_core::{LineIndex, Model, Scene, SceneError};
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -157,19 +158,28 @@ pub fn resolve_scene(name: Option<&str>) -> Result<Resolved, Failure> {
 /// Validates `scene`, naming `source` (the file or built-in) and, where `lines` knows
 /// it, the line of the key in errors; prints its warnings on stderr the same way.
 pub fn validate(scene: &Scene, source: &str, lines: Option<&LineIndex>) -> Result<Model, Failure> {
+    build_scene(scene, source, lines).map(|(_, model)| model)
+}
+
+/// [`validate`], with the scene as run: its regions cut into blocks (`Scene::build`).
+pub fn build_scene<'s>(
+    scene: &'s Scene,
+    source: &str,
+    lines: Option<&LineIndex>,
+) -> Result<(Cow<'s, Scene>, Model), Failure> {
     let at = |key: String, message: String| SceneError {
         file: source.to_string(),
         line: lines.and_then(|l| l.line(&key)),
         key,
         message,
     };
-    let model = scene
-        .validate()
+    let (explicit, model) = scene
+        .build()
         .map_err(|v| bad(at(v.key, v.message).to_string()))?;
     for w in &model.warnings {
         eprintln!("warning: {}", at(w.key.clone(), w.message.clone()));
     }
-    Ok(model)
+    Ok((explicit, model))
 }
 
 fn check(name: &str) -> Result<ExitCode, Failure> {
@@ -190,10 +200,7 @@ fn check(name: &str) -> Result<ExitCode, Failure> {
 /// into blocks and writes the explicit scene as JSON to `out` (a new file) or stdout.
 fn build(name: &str, out: Option<&Path>) -> Result<ExitCode, Failure> {
     let Resolved { scene, lines } = resolve_scene(Some(name))?;
-    validate(&scene, name, lines.as_ref())?;
-    let explicit = scene
-        .expanded()
-        .map_err(|v| bad(format!("{name}: key `{}`: {}", v.key, v.message)))?;
+    let (explicit, _) = build_scene(&scene, name, lines.as_ref())?;
     let text = serde_json::to_string_pretty(&explicit)
         .map_err(|e| Failure::Output(format!("cannot serialise the scene: {e}")))?
         + "\n";

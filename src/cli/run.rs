@@ -16,7 +16,7 @@
 use super::outdir::{Staging, check_out, output_error, staging_dir, work_and_out};
 use super::render::{render_outputs, write_new};
 use super::signals::{self, Signals};
-use super::{Failure, Resolved, bad, default_out, resolve_scene, validate};
+use super::{Failure, Resolved, bad, build_scene, default_out, resolve_scene, validate};
 use clap::Args;
 use dda::report::{Frame, HISTORY_HEADER, frame_resolution, frame_view, history_row};
 use dda_core::{Checkpoint, RunOptions, Scene, Simulation, Summary};
@@ -186,7 +186,9 @@ pub fn run(args: RunArgs) -> Result<ExitCode, Failure> {
     if args.limits.max_steps == Some(0) {
         return Err(bad("--max-steps must be at least 1"));
     }
-    let model = validate(&scene, &source, lines.as_ref())?;
+    // The scene as run, its regions cut into the blocks run: `dda run` of its record
+    // repeats the run.
+    let (explicit, model) = build_scene(&scene, &source, lines.as_ref())?;
     let out = args.out.clone().unwrap_or_else(|| default_out(&scene));
     check_out(&out)?;
     let signals = Signals::install();
@@ -194,12 +196,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode, Failure> {
     let work = staging.dir.clone();
     // From here on the staging folder is ours: an output failure removes it.
     let started = (|| {
-        // The scene as run, its regions cut into the blocks run: `dda run` of it repeats
-        // the run.
-        let explicit = scene
-            .expanded()
-            .map_err(|v| bad(format!("key `{}`: {}", v.key, v.message)))?;
-        let scene_json = serde_json::to_string_pretty(&explicit)
+        let scene_json = serde_json::to_string_pretty(&*explicit)
             .map_err(|e| Failure::Output(format!("cannot serialise the scene: {e}")))?;
         write_new(&work.join("scene.json"), &(scene_json + "\n"))?;
         let history_path = work.join("history.csv");

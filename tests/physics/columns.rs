@@ -8,7 +8,7 @@
 // A panic is how a test reports failure.
 #![allow(clippy::unwrap_used)]
 
-use dda::bench::{CollapseWatch, PAPER_COLUMNS};
+use dda::bench::{PAPER_COLUMNS, run_watched};
 use dda::core::{RunOptions, Simulation};
 
 #[test]
@@ -21,12 +21,8 @@ fn two_set_columns_collapse_permissibly_with_every_detector() {
             let model = scene.validate().unwrap();
             let d_tol = model.params.d_tol;
             let mut sim = Simulation::new(model, RunOptions::default());
-            let mut watch = CollapseWatch::new(&sim);
-            while !sim.finished() {
-                sim.step()
-                    .unwrap_or_else(|e| panic!("{blocks} blocks, {detector}: {e}"));
-                watch.observe(&sim);
-            }
+            let (watch, stop) = run_watched(&mut sim, u64::MAX);
+            assert_eq!(stop, None, "{blocks} blocks, {detector}");
             let deepest = sim.totals().max_penetration;
             assert!(
                 deepest < d_tol,

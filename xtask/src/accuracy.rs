@@ -12,7 +12,7 @@
 //! Writes `docs/accuracy.md` and `docs/results/accuracy/*.svg` (or under `--out DIR`).
 
 use dda_bench::analytic::{self, Rebound};
-use dda_bench::{PAPER_COLUMNS, mechanical_energy};
+use dda_bench::{PAPER_COLUMNS, mechanical_energy, potential_energy};
 use dda_core::{RunOptions, Scene, Simulation};
 use dda_report::plot;
 use std::fmt::Write as _;
@@ -231,13 +231,17 @@ pub fn run(out: &Path) -> Result<(), String> {
         let d_tol = model.params.d_tol;
         let mut sim = Simulation::new(model, RunOptions::default());
         let e0 = mechanical_energy(&sim);
-        let pe0 = potential(&sim);
+        let pe0 = potential_energy(&sim);
         let mut pen = Vec::new();
         // (t, mechanical energy change, potential energy released)
         let mut samples = Vec::new();
         let result = sim.run(|s, rec| {
             pen.push((s.time(), rec.max_penetration / d_tol));
-            samples.push((s.time(), mechanical_energy(s) - e0, pe0 - potential(s)));
+            samples.push((
+                s.time(),
+                mechanical_energy(s) - e0,
+                pe0 - potential_energy(s),
+            ));
         });
         result.map_err(|e| format!("column {blocks}: {e}"))?;
         let (_, last_change, last_released) = samples.last().copied().unwrap_or_default();
@@ -284,19 +288,4 @@ pub fn run(out: &Path) -> Result<(), String> {
     std::fs::write(&path, doc).map_err(|e| format!("{}: {e}", path.display()))?;
     println!("wrote {}", path.display());
     Ok(())
-}
-
-/// Gravity potential energy of the free blocks, -sum m g . centroid.
-fn potential(sim: &Simulation) -> f64 {
-    let model = sim.model();
-    let g = model.params.gravity.unwrap_or_default();
-    sim.blocks()
-        .iter()
-        .zip(&model.blocks)
-        .filter(|(_, m)| !m.fixed)
-        .map(|(b, m)| {
-            let rho = model.materials[m.material].density;
-            -rho * b.polygon.area() * g.dot(b.polygon.centroid())
-        })
-        .sum()
 }

@@ -180,27 +180,26 @@ fn variants_table() -> Result<String, String> {
         for k in -2..=2 {
             for turn in [-2.0, 0.0, 2.0] {
                 let dx = f64::from(k) * d_tol / 2.0;
-                let mut overlapping = false;
-                for (d, (detector, _)) in DETECTORS.iter().enumerate() {
-                    let mut scene = case.scene_moved(dx, turn);
-                    scene.analysis.detector = (*detector).into();
-                    // A moved may strike later or twice: time for the collision to end.
-                    scene.analysis.duration *= 3.0;
-                    let model = scene
+                let mut scene = case.scene_moved(dx, turn);
+                // A moved may strike later or twice: time for the collision to end.
+                scene.analysis.duration *= 3.0;
+                let validate = |scene: &dda_core::Scene| {
+                    scene
                         .validate()
-                        .map_err(|e| format!("{} moved: {}", case.name(), e.message))?;
-                    let [a, b] = [&model.blocks[0].polygon, &model.blocks[1].polygon];
-                    if separation(a, b).0 <= 0.0 {
-                        overlapping = true;
-                        break;
-                    }
-                    let mut sim = Simulation::new(model, RunOptions::default());
+                        .map_err(|e| format!("{} moved: {}", case.name(), e.message))
+                };
+                let model = validate(&scene)?;
+                let [a, b] = [&model.blocks[0].polygon, &model.blocks[1].polygon];
+                if separation(a, b).0 <= 0.0 {
+                    continue;
+                }
+                counted += 1;
+                for (d, (detector, _)) in DETECTORS.iter().enumerate() {
+                    scene.analysis.detector = (*detector).into();
+                    let mut sim = Simulation::new(validate(&scene)?, RunOptions::default());
                     if judge_collision(&mut sim).permissible {
                         right[d] += 1;
                     }
-                }
-                if !overlapping {
-                    counted += 1;
                 }
             }
         }

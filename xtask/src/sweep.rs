@@ -10,7 +10,7 @@
 //! not permissible, so that a detector whose time step collapses cannot hold up a sweep.
 
 use crate::args;
-use dda_bench::{CollapseWatch, PAPER_COLUMNS};
+use dda_bench::{PAPER_COLUMNS, Stop, run_watched};
 use dda_core::{RunOptions, Simulation};
 use dda_report::{csv_record, plot};
 use serde::Serialize;
@@ -136,24 +136,15 @@ pub fn run_one(
     };
     let d_tol = m.params.d_tol;
     let mut sim = Simulation::new(m, RunOptions::default());
-    let mut watch = CollapseWatch::new(&sim);
-    let mut result = Ok(());
-    while !sim.finished() {
-        if sim.totals().steps >= max_steps {
-            result = Err(format!(
-                "stopped after {max_steps} steps at t = {:.4} s (--max-steps)",
-                sim.time()
-            ));
-            break;
-        }
-        match sim.step() {
-            Ok(_) => watch.observe(&sim),
-            Err(e) => {
-                result = Err(e.to_string());
-                break;
-            }
-        }
-    }
+    let (watch, stop) = run_watched(&mut sim, max_steps);
+    let result = match stop {
+        None => Ok(()),
+        Some(Stop::Steps) => Err(format!(
+            "stopped after {max_steps} steps at t = {:.4} s (--max-steps)",
+            sim.time()
+        )),
+        Some(Stop::Failed(e)) => Err(e),
+    };
     let t = sim.totals();
     row.steps = t.steps;
     row.oci_cycles = t.oci_iterations;

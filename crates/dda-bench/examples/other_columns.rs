@@ -5,7 +5,7 @@
 //! 0.01 m, d_max half of it, penalty 3e9 N/m, dt 0.02 s, as the paper's 229-block column.
 //! `cargo run --release -p dda-bench --example other_columns` (a few minutes).
 
-use dda_bench::{CollapseWatch, ColumnSpec, column_scene, jointed_column, paper_analysis};
+use dda_bench::{ColumnSpec, column_scene, jointed_column, paper_analysis, run_watched};
 use dda_core::{RunOptions, Simulation};
 use dda_geom::JointSet;
 
@@ -62,17 +62,9 @@ fn main() {
                 }
             };
             let mut sim = Simulation::new(model, RunOptions::default());
-            let mut watch = CollapseWatch::new(&sim);
-            let mut stopped = false;
-            while !sim.finished() && sim.totals().steps < 5000 {
-                if sim.step().is_err() {
-                    stopped = true;
-                    break;
-                }
-                watch.observe(&sim);
-            }
+            let (watch, stop) = run_watched(&mut sim, 5000);
             let deepest = sim.totals().max_penetration;
-            let ok = !stopped && sim.finished() && deepest < d_tol && watch.permissible();
+            let ok = stop.is_none() && deepest < d_tol && watch.permissible();
             println!(
                 "| ({}, {}) ({}, {}) | {} | {:.3} | {detector} | {} | {} | {:.2} | {:.1e} |",
                 s1.0,

@@ -13,8 +13,8 @@
 //! Each criterion's worst instant is kept, with its time, to be reported beside the
 //! verdict.
 
+use crate::verdict::kinetic_energy;
 use dda_core::Simulation;
-use dda_core::scene::Mode;
 use serde::Serialize;
 
 /// The energy margin: kinetic energy may exceed the potential energy released by this
@@ -90,11 +90,7 @@ impl CollapseWatch {
     /// Records the state of `sim` after a step.
     pub fn observe(&mut self, sim: &Simulation) {
         let t = sim.time();
-        let kinetic = if sim.model().params.mode == Mode::Dynamic {
-            sim.kinetic_energy()
-        } else {
-            0.0
-        };
+        let kinetic = kinetic_energy(sim);
         let released = self.potential0 - potential_energy(sim);
         self.energy.keep((kinetic - released) / self.scale, t);
         let model = sim.model();
@@ -142,6 +138,31 @@ impl CollapseWatch {
     }
 }
 
+/// Why [`run_watched`] ended a run before its end.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Stop {
+    /// It had taken the most steps allowed.
+    Steps,
+    /// A step failed, with the engine's message.
+    Failed(String),
+}
+
+/// Runs `sim` to its end, watching every step, or until it has taken `max_steps` steps
+/// or a step fails; the watch, and why the run ended early, if it did.
+pub fn run_watched(sim: &mut Simulation, max_steps: u64) -> (CollapseWatch, Option<Stop>) {
+    let mut watch = CollapseWatch::new(sim);
+    while !sim.finished() {
+        if sim.totals().steps >= max_steps {
+            return (watch, Some(Stop::Steps));
+        }
+        if let Err(e) = sim.step() {
+            return (watch, Some(Stop::Failed(e.to_string())));
+        }
+        watch.observe(sim);
+    }
+    (watch, None)
+}
+
 /// Potential energy of gravity of the free blocks, -sum m g . centroid, J/m.
 pub fn potential_energy(sim: &Simulation) -> f64 {
     let model = sim.model();
@@ -177,11 +198,8 @@ mod tests {
     }
 
     fn watched(mut sim: Simulation) -> CollapseWatch {
-        let mut watch = CollapseWatch::new(&sim);
-        while !sim.finished() {
-            sim.step().expect("a free fall runs");
-            watch.observe(&sim);
-        }
+        let (watch, stop) = run_watched(&mut sim, u64::MAX);
+        assert_eq!(stop, None, "a free fall runs");
         watch
     }
 

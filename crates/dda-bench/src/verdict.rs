@@ -180,11 +180,7 @@ fn speed(sim: &Simulation) -> f64 {
 /// potential energy of gravity (-m g . centroid) when the scene has gravity.
 pub fn mechanical_energy(sim: &Simulation) -> f64 {
     let model = sim.model();
-    let kinetic = if model.params.mode == Mode::Dynamic {
-        sim.kinetic_energy()
-    } else {
-        0.0
-    };
+    let kinetic = kinetic_energy(sim);
     let g = model.params.gravity.unwrap_or_default();
     let rest: f64 = sim
         .blocks()
@@ -206,6 +202,16 @@ pub fn mechanical_energy(sim: &Simulation) -> f64 {
         })
         .sum();
     kinetic + rest
+}
+
+/// Kinetic energy of the free blocks: none in a static analysis, whose velocities are
+/// not carried.
+pub(crate) fn kinetic_energy(sim: &Simulation) -> f64 {
+    if sim.model().params.mode == Mode::Dynamic {
+        sim.kinetic_energy()
+    } else {
+        0.0
+    }
 }
 
 /// Rotational kinetic energy of block 0, 1/2 rho J omega^2.

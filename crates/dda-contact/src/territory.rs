@@ -323,9 +323,11 @@ fn exits<'s>(
         let end = k + out[k..].partition_point(|c| vertex(c) == vertex(&out[k]));
         let key = out[k].key;
         let (vs, es) = (shape(key.vertex_block), shape(key.edge_block));
-        let outside = outside(vs.vertices[key.vertex as usize], es, slack);
+        // Measured only for a vertex behind some line: most contacts are not.
+        let behind = (k..end).any(|m| out[m].d_n < 0.0);
+        let inside = behind && !outside(vs.vertices[key.vertex as usize], es, slack);
         let exit = (k..end)
-            .filter(|&m| out[m].d_n < 0.0 && !outside)
+            .filter(|&m| out[m].d_n < 0.0 && inside)
             .max_by(|&a, &b| out[a].d_n.total_cmp(&out[b].d_n).then(b.cmp(&a)));
         for m in k..end {
             if out[m].d_n >= 0.0 || Some(m) == exit {

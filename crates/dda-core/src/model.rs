@@ -5,6 +5,7 @@
 use crate::limits::{self, Range};
 use crate::scene::{Analysis, BlockSpec, Invalid, Joint, Material, Mode, Plane, Scene, invalid};
 use dda_geom::{ConvexPolygon, DVec2, PolygonError, PolygonOptions, separation};
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 
 impl Scene {
@@ -12,8 +13,15 @@ impl Scene {
     /// their blocks first (`regions::expand`), and the pieces their `min_area` dropped
     /// are reported as warnings.
     pub fn validate(&self) -> Result<Model, Invalid> {
+        self.build().map(|(_, model)| model)
+    }
+
+    /// [`Scene::validate`], with the scene as run: this one (borrowed) when every block
+    /// is explicit, else its regions cut into blocks (what `dda build` writes and a run
+    /// records), so that the cutting is done once.
+    pub fn build(&self) -> Result<(Cow<'_, Scene>, Model), Invalid> {
         if self.regions.is_empty() && self.joint_sets.is_empty() {
-            return self.validate_blocks();
+            return Ok((Cow::Borrowed(self), self.validate_blocks()?));
         }
         let (scene, dropped) = crate::regions::expand(self)?;
         let mut model = scene.validate_blocks()?;
@@ -23,7 +31,7 @@ impl Scene {
                 format!("{n} pieces below min_area dropped ({area:.3e} m^2 in all)"),
             ));
         }
-        Ok(model)
+        Ok((Cow::Owned(scene), model))
     }
 
     /// The scene with its regions cut into blocks: what `dda build` writes.
@@ -168,8 +176,7 @@ fn check_start_overlaps(blocks: &[ModelBlock]) -> Result<(), Invalid> {
             continue;
         }
         let (gap, _) = separation(&a.polygon, &b.polygon);
-        let size = a.polygon.diameter().max(b.polygon.diameter());
-        let allowed = limits::START_OVERLAP.max(1e-9 * size);
+        let allowed = start_overlap(&a.polygon, &b.polygon);
         if gap < -allowed {
             return Err(invalid(
                 format!("blocks[{}].vertices", q.b),
@@ -183,6 +190,12 @@ fn check_start_overlaps(blocks: &[ModelBlock]) -> Result<(), Invalid> {
         }
     }
     Ok(())
+}
+
+/// How far two outlines may overlap at the start, m: `limits::START_OVERLAP`, or 1e-9 of
+/// the larger one's size if that is more.
+pub(crate) fn start_overlap(a: &ConvexPolygon, b: &ConvexPolygon) -> f64 {
+    limits::START_OVERLAP.max(1e-9 * a.diameter().max(b.diameter()))
 }
 
 /// In a static analysis every free block must rest, through blocks within d_tol of each
