@@ -5,7 +5,7 @@
 //! build` writes and a run records; the engine only ever sees explicit blocks.
 
 use crate::limits;
-use crate::model::outline;
+use crate::model::{outline, start_overlap};
 use crate::scene::{BlockSpec, Invalid, Scene, invalid};
 use dda_geom::{ConvexPolygon, JointSet, PolygonError, cut_by_joint_sets, separation};
 
@@ -77,7 +77,7 @@ pub fn expand(scene: &Scene) -> Result<(Scene, Dropped), Invalid> {
         })?;
         for (j, other) in outlines.iter().enumerate() {
             let depth = -separation(&shape, other).0;
-            if depth > 1e-9 * shape.diameter().max(other.diameter()) {
+            if depth > start_overlap(&shape, other) {
                 return Err(invalid(
                     format!("{key}.vertices"),
                     format!(
@@ -131,6 +131,16 @@ pub fn expand(scene: &Scene) -> Result<(Scene, Dropped), Invalid> {
                 format!("region `{}`: {e}", r.id),
             )
         })?;
+        if cut.blocks.is_empty() {
+            return Err(invalid(
+                format!("{key}.min_area"),
+                format!(
+                    "all {} pieces of region `{}` are smaller than min_area ({min_area:e} \
+                     m^2), so nothing is left of it: is a spacing in the wrong unit?",
+                    cut.dropped, r.id
+                ),
+            ));
+        }
         if cut.dropped > 0 {
             dropped.slivers.push((i, cut.dropped, cut.dropped_area));
         }

@@ -63,7 +63,7 @@ fn a_region_is_cut_into_blocks_named_after_it() {
 
 #[test]
 fn bad_regions_and_sets_are_named_with_key_and_line() {
-    let cases: [(&str, &str, &str, &str, usize); 5] = [
+    let cases: [(&str, &str, &str, &str, usize); 6] = [
         // (line to replace, replacement, expected key, words in the message, nth line)
         (
             "joint_sets = [\"bedding\", \"cross\"]",
@@ -98,6 +98,14 @@ fn bad_regions_and_sets_are_named_with_key_and_line() {
             "spacing = 1e-4",
             "regions[1].joint_sets",
             "wrong unit",
+            0,
+        ),
+        (
+            // Every piece of the slope (a few m^2 each) below its min_area.
+            "joint_sets = [\"bedding\", \"cross\"]",
+            "joint_sets = [\"bedding\", \"cross\"]\nmin_area = 100.0",
+            "regions[1].min_area",
+            "nothing is left of it",
             0,
         ),
     ];
@@ -211,4 +219,18 @@ proptest! {
             }
         }
     }
+}
+
+/// Regions that share an edge written with numbers differing in the last of 6 decimals
+/// overlap by 1e-6 m, and are accepted as blocks written so are: the slope's foot at
+/// y = -0.000001 on the base's top at y = 0.
+#[test]
+fn regions_written_to_six_decimals_may_share_an_edge() {
+    let text = SLOPE.replacen(
+        "vertices = [[0.0, 0.0], [40.0, 0.0]",
+        "vertices = [[0.0, -0.000001], [40.0, -0.000001]",
+        1,
+    );
+    assert_ne!(text, SLOPE);
+    Scene::parse(&text, Format::Toml, "slope.toml").expect("a shared edge, rounded");
 }
