@@ -128,6 +128,7 @@ pub(crate) fn rock_block(id: &str, vertices: Vec<[f64; 2]>, fixed: bool) -> Bloc
         stress: None,
         loads: Vec::new(),
         fixed_points: Vec::new(),
+        ..Default::default()
     }
 }
 

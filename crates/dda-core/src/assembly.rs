@@ -98,17 +98,21 @@ impl Simulation {
             .for_each(terms);
     }
 
-    /// The joint of a contact: that of its blocks' materials, or none (no friction,
-    /// cohesion or tension) for a vertex-vertex contact, which carries a normal spring
-    /// only (`Contact::vertex_vertex`).
+    /// The joint of a contact: none (no friction, cohesion or tension) for a
+    /// vertex-vertex contact, which carries a normal spring only
+    /// (`Contact::vertex_vertex`); else the glue between parts of one body, the joint
+    /// its edge names, or that of its blocks' materials (`Model::joint_of_contact`).
     pub(crate) fn joint(&self, k: usize) -> JointProps {
         let c = &self.state.contacts.contacts[k];
         if c.vertex_vertex {
-            return JointProps {
-                tan_phi: 0.0,
-                cohesion: 0.0,
-                tensile_strength: 0.0,
-            };
+            return JointProps::default();
+        }
+        if self.model.joints_by_edge {
+            return *self.model.joint_of_contact(
+                c.key.vertex_block as usize,
+                c.key.edge_block as usize,
+                c.key.edge as usize,
+            );
         }
         let m = |b: u32| self.material[b as usize] as usize;
         *self

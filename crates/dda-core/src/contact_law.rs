@@ -83,6 +83,16 @@ pub fn decide(
     let (pn, ps) = (law.normal_penalty, law.shear_penalty);
     let Trial { d, band } = trial;
     let mut n = *c;
+    if joint.glued {
+        // Parts of one body: locked and bonded, whatever the trial says.
+        if c.state != ContactState::Locked {
+            n.locked_r = c.r.clamp(0.0, 1.0);
+        }
+        n.state = ContactState::Locked;
+        n.bonded = true;
+        n.normal_force = -pn * d;
+        return n;
+    }
     match c.state {
         ContactState::Open => {
             if d < 0.0 && pn * -d > band {

@@ -18,7 +18,8 @@ pub(crate) const NEIGHBOUR_SKIN: f64 = 2.0;
 impl Simulation {
     /// Step-start detection with states inherited from the previous step, then the
     /// engine's normalisation: closed contacts of frictionless joints slide (no shear
-    /// spring), and at t = 0 closed contacts of bonding joints start bonded.
+    /// spring), at t = 0 closed contacts of bonding joints start bonded, and active
+    /// contacts between parts of one body are locked and bonded.
     pub(crate) fn detect_step_start(&mut self) {
         self.scratch.aabbs.clear();
         self.scratch
@@ -44,7 +45,18 @@ impl Simulation {
             &mut self.state.contacts,
         );
         let first = self.state.totals.steps == 0;
+        let glue = self.model.joints_by_edge;
         for k in 0..self.state.contacts.contacts.len() {
+            if glue && self.state.contacts.contacts[k].active && self.joint(k).glued {
+                // Parts of one body: every active contact locked and bonded.
+                let c = &mut self.state.contacts.contacts[k];
+                if c.state != ContactState::Locked {
+                    c.locked_r = c.r.clamp(0.0, 1.0);
+                }
+                c.state = ContactState::Locked;
+                c.bonded = true;
+                continue;
+            }
             // Open contacts are left as they are: only closed ones need their joint.
             if !self.state.contacts.contacts[k].state.is_closed() {
                 continue;

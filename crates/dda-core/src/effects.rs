@@ -33,6 +33,8 @@ pub struct Effects {
     pub cohesion: bool,
     /// Tensile strength of bonded contacts.
     pub tension: bool,
+    /// Non-convex blocks carried as convex parts glued together.
+    pub glued_parts: bool,
 }
 
 impl Effects {
@@ -46,16 +48,21 @@ impl Effects {
             used[b.material] = true;
         }
         let (mut friction, mut cohesion, mut tension) = (false, false, false);
+        let mut note = |j: &crate::scene::JointProps| {
+            friction |= j.tan_phi > 0.0 || j.cohesion > 0.0;
+            cohesion |= j.cohesion > 0.0;
+            tension |= j.tensile_strength > 0.0;
+        };
         if blocks.len() > 1 {
             for a in 0..nm {
                 for b in 0..nm {
                     if used[a] && used[b] {
-                        let j = &model.joints[model.joint_of[a * nm + b] as usize];
-                        friction |= j.has_shear();
-                        cohesion |= j.cohesion > 0.0;
-                        tension |= j.tensile_strength > 0.0;
+                        note(&model.joints[model.joint_of[a * nm + b] as usize]);
                     }
                 }
+            }
+            for k in blocks.iter().flat_map(|b| b.edge_joints.iter().flatten()) {
+                note(&model.joints[*k as usize]);
             }
         }
         Effects {
@@ -74,6 +81,7 @@ impl Effects {
             friction,
             cohesion,
             tension,
+            glued_parts: blocks.iter().any(|b| b.body.is_some()),
         }
     }
 
@@ -103,6 +111,7 @@ impl Effects {
         on(self.friction, "friction");
         on(self.cohesion, "cohesion");
         on(self.tension, "tension");
+        on(self.glued_parts, "glued-parts");
         v
     }
 }

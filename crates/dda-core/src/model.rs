@@ -56,7 +56,15 @@ impl Scene {
         let mat_index =
             |name: &str| -> Option<usize> { names.iter().position(|n| n.as_str() == name) };
 
-        // Joint table: `default` everywhere, then `between` joints on their pairs.
+        // Joint table: `default` everywhere, then `between` joints on their pairs; joints
+        // without `between` apply only where an edge names them.
+        let named: std::collections::BTreeSet<&str> = self
+            .blocks
+            .iter()
+            .flat_map(|b| b.edge_joints.iter().map(String::as_str))
+            .collect();
+        let mut by_name: BTreeMap<&str, u16> = BTreeMap::new();
+        by_name.insert("default", 0);
         let nm = names.len();
         let mut joints = vec![JointProps::default()];
         let mut joint_of = vec![0u16; nm * nm];
@@ -75,10 +83,17 @@ impl Scene {
             }
             let key = format!("joints.{name}");
             let Some([m1, m2]) = &j.between else {
-                return Err(invalid(
-                    format!("{key}.between"),
-                    "a joint other than `default` needs `between = [material, material]`",
-                ));
+                // A joint that applies only where named: by blocks' `edge_joints`.
+                if !named.contains(name.as_str()) {
+                    return Err(invalid(
+                        format!("{key}.between"),
+                        "a joint other than `default` needs `between = [material, material]`, \
+                         or to be named by a joint set's `joint` or a block's `edge_joints`",
+                    ));
+                }
+                joints.push(j.validate(&key)?);
+                by_name.insert(name.as_str(), (joints.len() - 1) as u16);
+                continue;
             };
             let find = |m: &str| {
                 mat_index(m).ok_or_else(|| {
@@ -88,6 +103,7 @@ impl Scene {
             let (a, b) = (find(m1)?, find(m2)?);
             joints.push(j.validate(&key)?);
             let k = (joints.len() - 1) as u16;
+            by_name.insert(name.as_str(), k);
             joint_of[a * nm + b] = k;
             joint_of[b * nm + a] = k;
         }
@@ -97,6 +113,7 @@ impl Scene {
         }
         let mut blocks = Vec::with_capacity(self.blocks.len());
         let mut seen: BTreeMap<&str, usize> = BTreeMap::new();
+        let mut bodies: BTreeMap<&str, (u32, usize)> = BTreeMap::new();
         for (i, b) in self.blocks.iter().enumerate() {
             let key = format!("blocks[{i}]");
             if b.id.trim().is_empty() {
@@ -126,7 +143,59 @@ impl Scene {
                     ),
                 )
             })?;
-            blocks.push(b.validate(&key, material)?);
+            let mut block = b.validate(&key, material)?;
+            if !b.edge_joints.is_empty() {
+                if b.edge_joints.len() != b.vertices.len() {
+                    return Err(invalid(
+                        format!("{key}.edge_joints"),
+                        format!(
+                            "names the joints of {} edges, but the block has {} (one name \
+                             per edge, \"\" for the materials' joint)",
+                            b.edge_joints.len(),
+                            b.vertices.len()
+                        ),
+                    ));
+                }
+                for (e, name) in b.edge_joints.iter().enumerate() {
+                    if name.is_empty() {
+                        block.edge_joints.push(None);
+                        continue;
+                    }
+                    let k = by_name.get(name.as_str()).ok_or_else(|| {
+                        invalid(
+                            format!("{key}.edge_joints[{e}]"),
+                            format!(
+                                "no joint named `{name}` (defined: {})",
+                                self.joints.keys().cloned().collect::<Vec<_>>().join(", ")
+                            ),
+                        )
+                    })?;
+                    block.edge_joints.push(Some(*k));
+                }
+            }
+            if let Some(body) = &b.body {
+                if body.trim().is_empty() {
+                    return Err(invalid(format!("{key}.body"), "must not be empty"));
+                }
+                let next = bodies.len() as u32;
+                let (index, first) = *bodies.entry(body.as_str()).or_insert((next, i));
+                if self.blocks[first].fixed != b.fixed {
+                    return Err(invalid(
+                        format!("{key}.fixed"),
+                        format!(
+                            "the parts of body `{body}` must all be fixed or all free \
+                             (blocks[{first}] is {})",
+                            if self.blocks[first].fixed {
+                                "fixed"
+                            } else {
+                                "free"
+                            }
+                        ),
+                    ));
+                }
+                block.body = Some(index);
+            }
+            blocks.push(block);
         }
         if blocks.iter().all(|b| b.fixed) {
             return Err(invalid(
@@ -151,12 +220,16 @@ impl Scene {
                 ),
             ));
         }
+        let joints_by_edge = blocks
+            .iter()
+            .any(|b| b.body.is_some() || !b.edge_joints.is_empty());
         Ok(Model {
             name: self.name.clone(),
             params,
             materials,
             joints,
             joint_of,
+            joints_by_edge,
             blocks,
             warnings,
         })
@@ -441,17 +514,28 @@ pub struct JointProps {
     pub cohesion: f64,
     /// Tensile strength, Pa.
     pub tensile_strength: f64,
+    /// The artificial joint between the convex parts of one body: its contacts are
+    /// locked and bonded whenever active, and never open or slide.
+    pub glued: bool,
 }
 
 impl JointProps {
-    /// Whether contacts of this joint need shear springs (friction or cohesion).
+    /// The joint between parts of one body.
+    pub const GLUED: JointProps = JointProps {
+        tan_phi: 0.0,
+        cohesion: 0.0,
+        tensile_strength: 0.0,
+        glued: true,
+    };
+
+    /// Whether contacts of this joint need shear springs (friction, cohesion or glue).
     pub fn has_shear(&self) -> bool {
-        self.tan_phi > 0.0 || self.cohesion > 0.0
+        self.tan_phi > 0.0 || self.cohesion > 0.0 || self.glued
     }
 
-    /// Whether contacts of this joint start bonded (cohesion or tensile strength).
+    /// Whether contacts of this joint start bonded (cohesion, tensile strength or glue).
     pub fn bonds(&self) -> bool {
-        self.cohesion > 0.0 || self.tensile_strength > 0.0
+        self.cohesion > 0.0 || self.tensile_strength > 0.0 || self.glued
     }
 }
 
@@ -472,6 +556,7 @@ impl Joint {
                 self.tensile_strength,
                 &limits::STRENGTH,
             )?,
+            glued: false,
         })
     }
 }
@@ -495,6 +580,11 @@ pub struct ModelBlock {
     pub loads: Vec<(DVec2, DVec2)>,
     /// Fixed points.
     pub fixed_points: Vec<DVec2>,
+    /// The joint of each edge (index into [`Model::joints`]), or `None` for the
+    /// materials'; empty when every edge takes the materials' joint.
+    pub edge_joints: Vec<Option<u16>>,
+    /// The body this block is a part of (glued to the other parts), by index.
+    pub body: Option<u32>,
 }
 
 impl BlockSpec {
@@ -535,6 +625,8 @@ impl BlockSpec {
             stress,
             loads,
             fixed_points,
+            edge_joints: Vec::new(),
+            body: None,
         })
     }
 }
@@ -554,14 +646,32 @@ pub struct Model {
     pub joint_of: Vec<u16>,
     /// Blocks in scene order.
     pub blocks: Vec<ModelBlock>,
+    /// Whether some block names its edges' joints or is part of a body, so that a
+    /// contact's joint depends on more than its blocks' materials.
+    pub joints_by_edge: bool,
     /// What is allowed but suspect (key and message), for the user to see.
     pub warnings: Vec<Invalid>,
 }
 
 impl Model {
-    /// The joint acting between blocks `a` and `b`.
+    /// The joint acting between blocks `a` and `b` by their materials (edges may name
+    /// another: [`Model::joint_of_contact`]).
     pub fn joint_between(&self, a: usize, b: usize) -> &JointProps {
         self.joint_of_materials(self.blocks[a].material, self.blocks[b].material)
+    }
+
+    /// The joint of a contact of a vertex of block `a` against edge `edge` of block `b`:
+    /// the glue between parts of one body; else the joint the edge names; else that of
+    /// the two materials.
+    pub fn joint_of_contact(&self, a: usize, b: usize, edge: usize) -> &JointProps {
+        let (ba, bb) = (&self.blocks[a], &self.blocks[b]);
+        if ba.body.is_some() && ba.body == bb.body {
+            return &JointProps::GLUED;
+        }
+        match bb.edge_joints.get(edge) {
+            Some(Some(k)) => &self.joints[*k as usize],
+            _ => self.joint_of_materials(ba.material, bb.material),
+        }
     }
 
     /// The joint acting between blocks of materials `ma` and `mb`.

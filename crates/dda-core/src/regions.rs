@@ -1,13 +1,20 @@
 //! Rock masses from a scene file (docs/scene-format.md, "Regions and joint sets"): each
-//! `[[regions]]` entry is a convex outline cut by the scene's `[joint_sets]` into convex
-//! blocks, named `ID.1`, `ID.2`, ... in the order the cutting makes them. [`expand`]
-//! turns a scene with regions into the explicit scene, every block listed, that `dda
-//! build` writes and a run records; the engine only ever sees explicit blocks.
+//! `[[regions]]` entry is an outline (convex or not) cut by the scene's `[joint_sets]`
+//! (persistent or not, regular or statistical) into pieces of rock, named `ID.1`,
+//! `ID.2`, ... in the order the cutting makes them. A piece that is not convex is written
+//! as its convex parts `ID.k.1`, `ID.k.2`, ... with `body = "ID.k"`: glued where they
+//! touch. [`expand`] turns a scene with regions into the explicit scene, every block
+//! listed, that `dda build` writes and a run records; the engine only ever sees explicit
+//! blocks.
 
 use crate::limits;
-use crate::model::{outline, start_overlap};
-use crate::scene::{BlockSpec, Invalid, Scene, invalid};
-use dda_geom::{ConvexPolygon, JointSet, PolygonError, cut_by_joint_sets, separation};
+use crate::model::start_overlap;
+use crate::scene::{BlockSpec, Invalid, JointSetSpec, Scene, invalid};
+use dda_geom::{
+    Aabb, ConvexPolygon, DVec2, JointFamily, JointSet, JointSetError, Outline, PolygonError,
+    cut_mass, separation,
+};
+use std::collections::BTreeMap;
 
 /// What expanding the regions dropped: per region, the pieces below its `min_area`.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -17,95 +24,251 @@ pub struct Dropped {
     pub slivers: Vec<(usize, usize, f64)>,
 }
 
+/// The statistical family of a `[joint_sets.NAME]` entry, its values checked.
+fn family(
+    name: &str,
+    s: &JointSetSpec,
+    joints: &BTreeMap<String, crate::scene::Joint>,
+) -> Result<JointFamily, Invalid> {
+    let key = format!("joint_sets.{name}");
+    if !(s.dip_deg.is_finite() && (-360.0..=360.0).contains(&s.dip_deg)) {
+        return Err(invalid(
+            format!("{key}.dip_deg"),
+            format!(
+                "must be an angle in degrees between -360 and 360, got {}",
+                s.dip_deg
+            ),
+        ));
+    }
+    if !(s.spacing.is_finite() && s.spacing > 0.0 && s.spacing <= limits::COORDINATE.max) {
+        return Err(invalid(
+            format!("{key}.spacing"),
+            format!("must be a positive distance in m, got {}", s.spacing),
+        ));
+    }
+    if !limits::COORDINATE.contains(s.offset) {
+        return Err(invalid(
+            format!("{key}.offset"),
+            limits::COORDINATE.message(s.offset),
+        ));
+    }
+    if let Some(j) = &s.joint
+        && !joints.contains_key(j)
+    {
+        return Err(invalid(
+            format!("{key}.joint"),
+            format!(
+                "no joint named `{j}` (defined: {})",
+                names_or_none(joints.keys().map(String::as_str))
+            ),
+        ));
+    }
+    let spacing_cv = s.spacing_cv.unwrap_or(0.0);
+    if !(spacing_cv.is_finite() && (0.0..=0.5).contains(&spacing_cv)) {
+        return Err(invalid(
+            format!("{key}.spacing_cv"),
+            format!("must be between 0 and 0.5, got {spacing_cv}"),
+        ));
+    }
+    let dip_spread_deg = s.dip_spread_deg.unwrap_or(0.0);
+    if !(dip_spread_deg.is_finite() && (0.0..=45.0).contains(&dip_spread_deg)) {
+        return Err(invalid(
+            format!("{key}.dip_spread_deg"),
+            format!("must be between 0 and 45 degrees, got {dip_spread_deg}"),
+        ));
+    }
+    let positive = |k: &str, v: f64| {
+        if v.is_finite() && v > 0.0 && v <= limits::COORDINATE.max {
+            Ok(v)
+        } else {
+            Err(invalid(
+                format!("{key}.{k}"),
+                format!("must be a positive length in m, got {v}"),
+            ))
+        }
+    };
+    let trace = match (s.trace_length, s.bridge) {
+        (None, None) => None,
+        (Some(t), Some(b)) => Some((positive("trace_length", t)?, positive("bridge", b)?)),
+        (Some(_), None) => {
+            return Err(invalid(
+                format!("{key}.bridge"),
+                "a set with trace_length needs bridge, the length of intact rock between \
+                 traces along a joint (m)",
+            ));
+        }
+        (None, Some(_)) => {
+            return Err(invalid(
+                format!("{key}.trace_length"),
+                "a set with bridge needs trace_length, the length of each joint trace (m)",
+            ));
+        }
+    };
+    // Each set draws from its own stream: the seed mixed with the set's name (FNV-1a).
+    let name_hash = name.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3)
+    });
+    Ok(JointFamily {
+        set: JointSet {
+            dip_deg: s.dip_deg,
+            spacing: s.spacing,
+            offset: s.offset,
+        },
+        spacing_cv,
+        dip_spread_deg,
+        trace,
+        seed: s.seed.unwrap_or(0) ^ name_hash,
+    })
+}
+
+fn names_or_none<'a>(names: impl Iterator<Item = &'a str>) -> String {
+    let v: Vec<&str> = names.collect();
+    if v.is_empty() {
+        "none".to_string()
+    } else {
+        v.join(", ")
+    }
+}
+
+/// The outline of region `key` (a simple polygon, counter-clockwise), its errors naming
+/// the vertex.
+fn region_outline(key: &str, id: &str, vertices: &[[f64; 2]]) -> Result<Outline, Invalid> {
+    for (i, v) in vertices.iter().enumerate() {
+        for (k, &c) in v.iter().enumerate() {
+            if !limits::COORDINATE.contains(c) {
+                return Err(invalid(
+                    format!("{key}.vertices[{i}][{k}]"),
+                    limits::COORDINATE.message(c),
+                ));
+            }
+        }
+    }
+    Outline::new(vertices.iter().map(|&c| DVec2::from(c)).collect()).map_err(|e| {
+        let at = match e {
+            PolygonError::DuplicateVertex { vertex, .. }
+            | PolygonError::CollinearVertex { vertex }
+            | PolygonError::NotConvex { vertex } => format!("{key}.vertices[{vertex}]"),
+            PolygonError::SelfIntersecting { edge_a, .. } => format!("{key}.vertices[{edge_a}]"),
+            _ => format!("{key}.vertices"),
+        };
+        let hint = match e {
+            PolygonError::Clockwise => " (list the outline's vertices counter-clockwise)",
+            PolygonError::SelfIntersecting { .. } => {
+                " (an outline is one loop that never touches itself; edge k runs from vertex \
+                 k to vertex k + 1)"
+            }
+            _ => "",
+        };
+        invalid(at, format!("region `{id}`: {e}{hint}"))
+    })
+}
+
 /// The scene with every region replaced by the blocks it is cut into (after the
 /// explicit blocks, region by region) and no joint sets left, and what was dropped.
 /// Errors name the key: `regions[i].vertices[k]`, `regions[i].joint_sets[k]`,
 /// `joint_sets.NAME.spacing`, ...
 pub fn expand(scene: &Scene) -> Result<(Scene, Dropped), Invalid> {
-    let mut sets = std::collections::BTreeMap::new();
+    let mut families = BTreeMap::new();
     for (name, s) in &scene.joint_sets {
-        let key = format!("joint_sets.{name}");
-        if !(s.dip_deg.is_finite() && (-360.0..=360.0).contains(&s.dip_deg)) {
-            return Err(invalid(
-                format!("{key}.dip_deg"),
-                format!(
-                    "must be an angle in degrees between -360 and 360, got {}",
-                    s.dip_deg
-                ),
-            ));
-        }
-        if !(s.spacing.is_finite() && s.spacing > 0.0 && s.spacing <= limits::COORDINATE.max) {
-            return Err(invalid(
-                format!("{key}.spacing"),
-                format!("must be a positive distance in m, got {}", s.spacing),
-            ));
-        }
-        if !limits::COORDINATE.contains(s.offset) {
-            return Err(invalid(
-                format!("{key}.offset"),
-                limits::COORDINATE.message(s.offset),
-            ));
-        }
-        sets.insert(
-            name.as_str(),
-            JointSet {
-                dip_deg: s.dip_deg,
-                spacing: s.spacing,
-                offset: s.offset,
-            },
-        );
+        families.insert(name.as_str(), family(name, s, &scene.joints)?);
     }
-    let mut out = scene.clone();
-    out.joint_sets.clear();
-    out.regions.clear();
-    let mut dropped = Dropped::default();
-    let mut outlines: Vec<ConvexPolygon> = Vec::new();
-    let mut total = 0.0;
+    let set_names: Vec<&str> = families.keys().copied().collect();
+    let mut outlines = Vec::with_capacity(scene.regions.len());
+    let mut parts: Vec<Vec<ConvexPolygon>> = Vec::with_capacity(scene.regions.len());
     for (i, r) in scene.regions.iter().enumerate() {
         let key = format!("regions[{i}]");
         if r.id.trim().is_empty() {
             return Err(invalid(format!("{key}.id"), "must not be empty"));
         }
-        let shape = outline(&key, &r.vertices, |e| {
-            let hint = if matches!(e, PolygonError::NotConvex { .. }) {
-                " (a region's outline must be convex for now: split it into convex regions \
-                 that share their edges)"
-            } else {
-                ""
-            };
-            format!("region `{}`: {e}{hint}", r.id)
-        })?;
-        for (j, other) in outlines.iter().enumerate() {
-            let depth = -separation(&shape, other).0;
-            if depth > start_overlap(&shape, other) {
+        let shape = region_outline(&key, &r.id, &r.vertices)?;
+        let own: Vec<ConvexPolygon> = shape
+            .convex_parts()
+            .iter()
+            .filter_map(|p| {
+                ConvexPolygon::new(p.iter().map(|&k| shape.vertices()[k]).collect::<Vec<_>>()).ok()
+            })
+            .collect();
+        for (j, other) in parts.iter().enumerate() {
+            for a in &own {
+                for b in other {
+                    let depth = -separation(a, b).0;
+                    if depth > start_overlap(a, b) {
+                        return Err(invalid(
+                            format!("{key}.vertices"),
+                            format!(
+                                "region `{}` overlaps region `{}` (regions[{j}]) by {depth:e} m",
+                                r.id, scene.regions[j].id
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+        for (k, name) in r.joint_sets.iter().enumerate() {
+            if !families.contains_key(name.as_str()) {
                 return Err(invalid(
-                    format!("{key}.vertices"),
+                    format!("{key}.joint_sets[{k}]"),
                     format!(
-                        "region `{}` overlaps region `{}` (regions[{j}]) by {depth:e} m",
-                        r.id, scene.regions[j].id
+                        "no joint set named `{name}` (defined: {})",
+                        names_or_none(set_names.iter().copied())
                     ),
                 ));
             }
         }
-        let mut cut_by = Vec::new();
-        let mut estimate = 1.0;
-        for (k, name) in r.joint_sets.iter().enumerate() {
-            let set = sets.get(name.as_str()).ok_or_else(|| {
-                invalid(
-                    format!("{key}.joint_sets[{k}]"),
+        outlines.push(shape);
+        parts.push(own);
+    }
+    // Each set's joints over the box of every region it cuts, so that a joint runs on
+    // from one region into the next.
+    let mut joints_of = BTreeMap::new();
+    for (s, name) in set_names.iter().enumerate() {
+        let users: Vec<usize> = (0..scene.regions.len())
+            .filter(|&i| scene.regions[i].joint_sets.iter().any(|n| n == name))
+            .collect();
+        if users.is_empty() {
+            continue;
+        }
+        let bounds = users
+            .iter()
+            .map(|&i| outlines[i].aabb())
+            .reduce(|a, b| Aabb::from_points(&[a.min, a.max, b.min, b.max]))
+            .unwrap_or(Aabb::from_points(&[DVec2::ZERO]));
+        let joints = families[name]
+            .joints(s, &bounds, limits::MAX_REGION_BLOCKS as usize)
+            .map_err(|e| match e {
+                JointSetError::TooMany { .. } => invalid(
+                    format!("joint_sets.{name}.spacing"),
                     format!(
-                        "no joint set named `{name}` (defined: {})",
-                        if sets.is_empty() {
-                            "none".to_string()
-                        } else {
-                            sets.keys().copied().collect::<Vec<_>>().join(", ")
-                        }
+                        "the set would cut its regions by more than {:e} joints: is the \
+                         spacing in the wrong unit?",
+                        limits::MAX_REGION_BLOCKS
                     ),
-                )
+                ),
+                e => invalid(format!("joint_sets.{name}"), e.to_string()),
             })?;
-            let (lo, hi) = shape.extent(set.normal());
+        joints_of.insert(*name, joints);
+    }
+    let mut out = scene.clone();
+    out.joint_sets.clear();
+    out.regions.clear();
+    let mut dropped = Dropped::default();
+    let mut total = 0.0;
+    for (i, r) in scene.regions.iter().enumerate() {
+        let key = format!("regions[{i}]");
+        let shape = &outlines[i];
+        let mut joints = Vec::new();
+        let mut estimate = 1.0;
+        for name in &r.joint_sets {
+            let set = &families[name.as_str()].set;
+            let n = set.normal();
+            let (lo, hi) = shape
+                .vertices()
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                    (lo.min(n.dot(*v)), hi.max(n.dot(*v)))
+                });
             estimate *= (hi - lo) / set.spacing + 1.0;
-            cut_by.push(*set);
+            joints.extend(joints_of[name.as_str()].iter().cloned());
         }
         total += estimate;
         if total > limits::MAX_REGION_BLOCKS {
@@ -125,13 +288,13 @@ pub fn expand(scene: &Scene) -> Result<(Scene, Dropped), Invalid> {
                 format!("must be an area in m^2, 0 or more, got {min_area}"),
             ));
         }
-        let cut = cut_by_joint_sets(&shape, &cut_by, min_area).map_err(|e| {
+        let cut = cut_mass(shape, &joints, min_area).map_err(|e| {
             invalid(
                 format!("{key}.joint_sets"),
                 format!("region `{}`: {e}", r.id),
             )
         })?;
-        if cut.blocks.is_empty() {
+        if cut.pieces.is_empty() {
             return Err(invalid(
                 format!("{key}.min_area"),
                 format!(
@@ -144,20 +307,36 @@ pub fn expand(scene: &Scene) -> Result<(Scene, Dropped), Invalid> {
         if cut.dropped > 0 {
             dropped.slivers.push((i, cut.dropped, cut.dropped_area));
         }
-        for (k, b) in cut.blocks.iter().enumerate() {
-            out.blocks.push(BlockSpec {
-                id: format!("{}.{}", r.id, k + 1),
-                material: r.material.clone(),
-                vertices: b.vertices().iter().map(|v| [v.x, v.y]).collect(),
-                fixed: r.fixed,
-                velocity: None,
-                angular_velocity: None,
-                stress: None,
-                loads: Vec::new(),
-                fixed_points: Vec::new(),
-            });
+        for (k, piece) in cut.pieces.iter().enumerate() {
+            let id = format!("{}.{}", r.id, k + 1);
+            let glued = piece.parts.len() > 1;
+            for (m, (part, sets)) in piece.parts.iter().zip(&piece.edge_sets).enumerate() {
+                let edge_joints: Vec<String> = sets
+                    .iter()
+                    .map(|s| {
+                        s.and_then(|s| scene.joint_sets[set_names[s]].joint.clone())
+                            .unwrap_or_default()
+                    })
+                    .collect();
+                out.blocks.push(BlockSpec {
+                    id: if glued {
+                        format!("{id}.{}", m + 1)
+                    } else {
+                        id.clone()
+                    },
+                    material: r.material.clone(),
+                    vertices: part.vertices().iter().map(|v| [v.x, v.y]).collect(),
+                    fixed: r.fixed,
+                    edge_joints: if edge_joints.iter().any(|j| !j.is_empty()) {
+                        edge_joints
+                    } else {
+                        Vec::new()
+                    },
+                    body: glued.then(|| id.clone()),
+                    ..Default::default()
+                });
+            }
         }
-        outlines.push(shape);
     }
     Ok((out, dropped))
 }

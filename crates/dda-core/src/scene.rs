@@ -35,20 +35,39 @@ pub struct Scene {
     pub regions: Vec<RegionSpec>,
 }
 
-/// A `[joint_sets.NAME]` entry: a family of parallel, persistent joints.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// A `[joint_sets.NAME]` entry: a family of joints, parallel and persistent unless its
+/// statistics say otherwise.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct JointSetSpec {
     /// Direction of the joint lines, degrees counter-clockwise from +x.
     pub dip_deg: f64,
-    /// Normal distance between neighbouring joints, m.
+    /// Normal distance between neighbouring joints, m (the mean, if it varies).
     pub spacing: f64,
     /// Position of one joint along the set's normal (-sin dip, cos dip), m.
     #[serde(default)]
     pub offset: f64,
+    /// Contact properties of these joints: a `[joints.NAME]`; absent, the materials'.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint: Option<String>,
+    /// Coefficient of variation of the spacing (uniform draws), 0 to 0.5.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spacing_cv: Option<f64>,
+    /// Largest deviation of a joint's dip from `dip_deg` (uniform draws), degrees.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dip_spread_deg: Option<f64>,
+    /// Length of each joint's traces, m; absent, the joints are persistent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trace_length: Option<f64>,
+    /// Length of intact rock between traces along a joint, m (with `trace_length`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bridge: Option<f64>,
+    /// Seed of the statistical draws (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
 }
 
-/// A `[[regions]]` entry: a convex outline filled with one material and cut by joint
+/// A `[[regions]]` entry: an outline filled with one material and cut by joint
 /// sets into blocks named `ID.1`, `ID.2`, ...
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -57,7 +76,7 @@ pub struct RegionSpec {
     pub id: String,
     /// Material name.
     pub material: String,
-    /// Outline `[x, y]`, counter-clockwise, convex.
+    /// Outline `[x, y]`, counter-clockwise, a simple polygon (convex or not).
     #[serde(deserialize_with = "exact::list")]
     pub vertices: Vec<[f64; 2]>,
     /// Names of the joint sets cutting it (none: the region is one block).
@@ -192,7 +211,8 @@ pub struct Joint {
     /// Tensile strength, Pa.
     #[serde(default)]
     pub tensile_strength: f64,
-    /// The two materials this joint applies between; absent for `default`.
+    /// The two materials this joint applies between; absent for `default` and for joints
+    /// that apply only where named (by a joint set or a block's `edge_joints`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub between: Option<[String; 2]>,
 }
@@ -210,7 +230,7 @@ pub struct Load {
 }
 
 /// A `[[blocks]]` entry.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BlockSpec {
     /// Block id, unique in the scene.
@@ -250,6 +270,15 @@ pub struct BlockSpec {
         deserialize_with = "exact::list"
     )]
     pub fixed_points: Vec<[f64; 2]>,
+    /// The joint of each edge (edge k from vertex k to k + 1), by `[joints.NAME]`; an
+    /// empty name: the joint of the blocks' materials. Empty: every edge's joint is the
+    /// materials'.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub edge_joints: Vec<String>,
+    /// The non-convex block this one is a convex part of: blocks of one body are glued
+    /// where they touch (bonded contacts that never open or slide).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub body: Option<String>,
 }
 
 /// A scene that could not be read or is invalid: where, and what is wrong.

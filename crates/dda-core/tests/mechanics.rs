@@ -62,6 +62,7 @@ fn block(id: &str, vertices: &[[f64; 2]]) -> BlockSpec {
         stress: None,
         loads: Vec::new(),
         fixed_points: Vec::new(),
+        ..Default::default()
     }
 }
 

@@ -63,7 +63,7 @@ fn a_region_is_cut_into_blocks_named_after_it() {
 
 #[test]
 fn bad_regions_and_sets_are_named_with_key_and_line() {
-    let cases: [(&str, &str, &str, &str, usize); 6] = [
+    let cases: [(&str, &str, &str, &str, usize); 10] = [
         // (line to replace, replacement, expected key, words in the message, nth line)
         (
             "joint_sets = [\"bedding\", \"cross\"]",
@@ -80,10 +80,39 @@ fn bad_regions_and_sets_are_named_with_key_and_line() {
             0,
         ),
         (
+            // Edge 1, (40, 0) to (0, 12), crosses edge 3, (40, 12) to (0, 0).
             "vertices = [[0.0, 0.0], [40.0, 0.0]",
-            "vertices = [[0.0, 0.0], [40.0, 0.0], [40.0, 12.0], [30.0, 5.0], [25.0, 12.0]]",
-            "regions[1].vertices[3]",
-            "convex",
+            "vertices = [[0.0, 0.0], [40.0, 0.0], [0.0, 12.0], [40.0, 12.0]]",
+            "regions[1].vertices[1]",
+            "edge 1 crosses edge 3",
+            0,
+        ),
+        (
+            "vertices = [[0.0, 0.0], [40.0, 0.0]",
+            "vertices = [[0.0, 0.0], [25.0, 12.0], [40.0, 12.0], [40.0, 0.0]]",
+            "regions[1].vertices",
+            "counter-clockwise",
+            0,
+        ),
+        (
+            "spacing = 2.0",
+            "spacing = 2.0\njoint = \"beding\"",
+            "joint_sets.bedding.joint",
+            "no joint named `beding`",
+            0,
+        ),
+        (
+            "spacing = 2.0",
+            "spacing = 2.0\ntrace_length = 5.0",
+            "joint_sets.bedding.bridge",
+            "needs bridge",
+            0,
+        ),
+        (
+            "spacing = 2.0",
+            "spacing = 2.0\nspacing_cv = 0.9",
+            "joint_sets.bedding.spacing_cv",
+            "between 0 and 0.5",
             0,
         ),
         (
@@ -163,6 +192,7 @@ fn set() -> impl Strategy<Value = JointSetSpec> {
             dip_deg,
             spacing,
             offset,
+            ..Default::default()
         }
     })
 }

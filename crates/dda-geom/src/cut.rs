@@ -41,31 +41,76 @@ pub struct Split {
 }
 
 /// Removes consecutive points closer than `eps` (the intersection of a line passing within
-/// `eps` of a vertex); returns `None` when fewer than three remain.
-fn clean(mut pts: Vec<DVec2>, eps: f64) -> Option<Vec<DVec2>> {
-    pts.dedup_by(|q, p| p.distance(*q) <= eps);
+/// `eps` of a vertex), keeping each edge's label (`labels[i]` is the label of the edge
+/// from point i to point i + 1; a point removed as a duplicate of the one before hands its
+/// outgoing label to it); `None` when fewer than three remain.
+pub(crate) fn clean_ring<L: Copy>(
+    mut pts: Vec<DVec2>,
+    mut labels: Vec<L>,
+    eps: f64,
+) -> Option<(Vec<DVec2>, Vec<L>)> {
+    let mut k = 1;
+    while k < pts.len() {
+        if pts[k - 1].distance(pts[k]) <= eps {
+            pts.remove(k);
+            let l = labels.remove(k);
+            labels[k - 1] = l;
+        } else {
+            k += 1;
+        }
+    }
     while pts.len() >= 2 && pts[0].distance(pts[pts.len() - 1]) <= eps {
         pts.pop();
+        labels.pop();
     }
-    (pts.len() >= 3).then_some(pts)
+    (pts.len() >= 3).then_some((pts, labels))
 }
 
-/// Validates one side of a split: degenerate sides (no area) become `None`.
-fn piece(pts: Vec<DVec2>, eps: f64) -> Result<Option<ConvexPolygon>, PolygonError> {
-    let Some(pts) = clean(pts, eps) else {
+/// Validates one side of a split: degenerate sides (no area) become `None`. Collinear
+/// points are merged (an edge then keeps the label of its first part).
+pub(crate) fn labelled_piece<L: Copy>(
+    pts: Vec<DVec2>,
+    labels: Vec<L>,
+    eps: f64,
+) -> Result<Option<(ConvexPolygon, Vec<L>)>, PolygonError> {
+    let Some((pts, labels)) = clean_ring(pts, labels, eps) else {
         return Ok(None);
     };
-    match ConvexPolygon::new(pts) {
-        Ok(p) => Ok(Some(p)),
+    match ConvexPolygon::with_options(pts, &crate::polygon::PolygonOptions::default()) {
+        Ok((p, repairs)) => {
+            let kept: Vec<L> = labels
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| repairs.merged.binary_search(i).is_err())
+                .map(|(_, &l)| l)
+                .collect();
+            // Validation keeps the input's order (counter-clockwise input is never
+            // reversed), so the kept labels line up with the polygon's edges.
+            Ok(Some((p, kept)))
+        }
         Err(PolygonError::ZeroArea | PolygonError::TooFewVertices { .. }) => Ok(None),
         Err(e) => Err(e),
     }
 }
 
-/// Splits a convex polygon by a line. Vertices exactly on the line go to both sides; a side
-/// without area is `None`. The pieces' areas add up to the polygon's to rounding.
-pub fn split(poly: &ConvexPolygon, line: &Line) -> Result<Split, PolygonError> {
-    let v = poly.vertices();
+/// A convex ring split by a line: each side's points and edge labels (unvalidated).
+type SplitRings<L> = [(Vec<DVec2>, Vec<L>); 2];
+
+/// Splits the convex ring `v` (edge labels `labels`) by `line`: the points where
+/// `normal . x <= offset` and those where it is `>= offset`, with the new edges along the
+/// line labelled `cut`. Vertices exactly on the line go to both sides. Also returns
+/// whether any vertex lies strictly below and strictly above.
+pub(crate) fn split_ring<L: Copy>(
+    v: &[DVec2],
+    labels: &[L],
+    line: &Line,
+    cut: L,
+) -> (SplitRings<L>, bool, bool) {
+    #[derive(Clone, Copy, PartialEq)]
+    enum From {
+        Vertex(usize),
+        Crossing(usize),
+    }
     let n = v.len();
     // Distances relative to the first vertex, to keep them accurate far from the origin.
     let base = line.normal.dot(v[0]) - line.offset;
@@ -73,33 +118,61 @@ pub fn split(poly: &ConvexPolygon, line: &Line) -> Result<Split, PolygonError> {
         .iter()
         .map(|&p| base + line.normal.dot(p - v[0]))
         .collect();
-    let (mut below, mut above) = (Vec::with_capacity(n + 1), Vec::with_capacity(n + 1));
+    let mut below: Vec<(DVec2, From)> = Vec::with_capacity(n + 1);
+    let mut above: Vec<(DVec2, From)> = Vec::with_capacity(n + 1);
     for i in 0..n {
         let j = (i + 1) % n;
         if s[i] <= 0.0 {
-            below.push(v[i]);
+            below.push((v[i], From::Vertex(i)));
         }
         if s[i] >= 0.0 {
-            above.push(v[i]);
+            above.push((v[i], From::Vertex(i)));
         }
         if (s[i] < 0.0 && s[j] > 0.0) || (s[i] > 0.0 && s[j] < 0.0) {
             let x = v[i] + (v[j] - v[i]) * (s[i] / (s[i] - s[j]));
-            below.push(x);
-            above.push(x);
+            below.push((x, From::Crossing(i)));
+            above.push((x, From::Crossing(i)));
         }
     }
+    // The edge from a to b runs along the polygon's edge i when b follows a on it;
+    // otherwise it runs along the cut.
+    let ring = |pts: Vec<(DVec2, From)>| -> (Vec<DVec2>, Vec<L>) {
+        let m = pts.len();
+        let label = |k: usize| {
+            let (a, b) = (pts[k].1, pts[(k + 1) % m].1);
+            match (a, b) {
+                (From::Vertex(i), From::Vertex(j)) if j == (i + 1) % n => labels[i],
+                (From::Vertex(i), From::Crossing(j)) if i == j => labels[i],
+                (From::Crossing(i), From::Vertex(j)) if j == (i + 1) % n => labels[i],
+                _ => cut,
+            }
+        };
+        let l = (0..m).map(label).collect();
+        (pts.into_iter().map(|(p, _)| p).collect(), l)
+    };
+    let has_below = s.iter().any(|&x| x < 0.0);
+    let has_above = s.iter().any(|&x| x > 0.0);
+    ([ring(below), ring(above)], has_below, has_above)
+}
+
+/// Splits a convex polygon by a line. Vertices exactly on the line go to both sides; a side
+/// without area is `None`. The pieces' areas add up to the polygon's to rounding.
+pub fn split(poly: &ConvexPolygon, line: &Line) -> Result<Split, PolygonError> {
+    let v = poly.vertices();
+    let labels = vec![(); v.len()];
+    let ([below, above], has_below, has_above) = split_ring(v, &labels, line, ());
     let eps = DEFAULT_REL_TOL * poly.aabb().size().length();
-    let below = if s.iter().any(|&x| x < 0.0) {
-        piece(below, eps)?
-    } else {
-        None
+    let side = |(pts, l): (Vec<DVec2>, Vec<()>), present: bool| {
+        if present {
+            labelled_piece(pts, l, eps).map(|p| p.map(|(p, _)| p))
+        } else {
+            Ok(None)
+        }
     };
-    let above = if s.iter().any(|&x| x > 0.0) {
-        piece(above, eps)?
-    } else {
-        None
-    };
-    Ok(Split { below, above })
+    Ok(Split {
+        below: side(below, has_below)?,
+        above: side(above, has_above)?,
+    })
 }
 
 /// A joint set: parallel lines at dip angle `dip_deg` (degrees, counter-clockwise from

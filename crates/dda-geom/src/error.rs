@@ -107,6 +107,13 @@ pub enum JointSetError {
         /// What was wrong with the piece.
         error: PolygonError,
     },
+    /// The set would make more joints than allowed (a spacing in the wrong unit).
+    TooMany {
+        /// Index of the joint set.
+        set: usize,
+        /// The most joints allowed.
+        max: usize,
+    },
     /// The sliver threshold must be finite and non-negative.
     MinArea {
         /// The threshold given.
@@ -128,6 +135,9 @@ impl fmt::Display for JointSetError {
             }
             Self::Piece { set, error } => {
                 write!(f, "joint set {set} made an invalid piece: {error}")
+            }
+            Self::TooMany { set, max } => {
+                write!(f, "joint set {set} would make more than {max} joints")
             }
             Self::MinArea { min_area } => {
                 write!(

@@ -12,6 +12,7 @@ mod aabb;
 mod cut;
 mod entrance;
 mod error;
+mod mass;
 mod measures;
 mod polygon;
 pub mod shapes;
@@ -25,6 +26,7 @@ pub use self::entrance::{
     signed_distance,
 };
 pub use self::error::{JointSetError, PolygonError};
+pub use self::mass::{Joint, JointFamily, MassCutting, Outline, Piece, cut_mass};
 pub use self::measures::{
     ContactSubregion, VertexEdge, contact_region, entrance_filter, node_distances, normal_distance,
     outward_normal, projection_ratio,
