@@ -239,8 +239,8 @@ pub fn expand(scene: &Scene) -> Result<(Scene, Dropped), Invalid> {
                 JointSetError::TooMany { .. } => invalid(
                     format!("joint_sets.{name}.spacing"),
                     format!(
-                        "the set would cut its regions by more than {:e} joints: is the \
-                         spacing in the wrong unit?",
+                        "the set would cut its regions by more than {:e} joints or traces: is \
+                         the spacing, trace_length or bridge in the wrong unit?",
                         limits::MAX_REGION_BLOCKS
                     ),
                 ),

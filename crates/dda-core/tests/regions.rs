@@ -63,7 +63,7 @@ fn a_region_is_cut_into_blocks_named_after_it() {
 
 #[test]
 fn bad_regions_and_sets_are_named_with_key_and_line() {
-    let cases: [(&str, &str, &str, &str, usize); 10] = [
+    let cases: [(&str, &str, &str, &str, usize); 11] = [
         // (line to replace, replacement, expected key, words in the message, nth line)
         (
             "joint_sets = [\"bedding\", \"cross\"]",
@@ -106,6 +106,14 @@ fn bad_regions_and_sets_are_named_with_key_and_line() {
             "spacing = 2.0\ntrace_length = 5.0",
             "joint_sets.bedding.bridge",
             "needs bridge",
+            0,
+        ),
+        (
+            // Traces of a nanometre: billions of them, refused before any is made.
+            "spacing = 2.0",
+            "spacing = 2.0\ntrace_length = 1e-9\nbridge = 1e-9",
+            "joint_sets.bedding.spacing",
+            "joints or traces",
             0,
         ),
         (

@@ -303,16 +303,6 @@ impl Joint {
             Some(tr) => tr.iter().any(|&[a, b]| a <= t && t <= b),
         }
     }
-
-    /// The ends of its traces (none for a persistent joint).
-    fn tips(&self) -> impl Iterator<Item = DVec2> + '_ {
-        let d = self.direction();
-        let foot = self.line.normal * self.line.offset;
-        self.traces
-            .iter()
-            .flatten()
-            .flat_map(move |&[a, b]| [foot + a * d, foot + b * d])
-    }
 }
 
 /// A joint set with its statistics: spacing varying about its mean (coefficient of
@@ -348,7 +338,8 @@ impl JointFamily {
 
     /// The family's joints that may cross `bounds`, in ascending position along the
     /// normal, tagged with `set`. A regular family's are the lines `offset + k spacing`.
-    /// At most `max` joints are made (an error beyond: a spacing in the wrong unit).
+    /// At most `max` joints and `max` traces are made (an error beyond: a spacing or a
+    /// trace length in the wrong unit).
     pub fn joints(
         &self,
         set: usize,
@@ -423,6 +414,7 @@ impl JointFamily {
         }
         let centre = 0.5 * (bounds.min + bounds.max);
         let mut out = Vec::with_capacity(positions.len());
+        let mut traces_made = 0usize;
         for p in positions {
             let line = if spread > 0.0 {
                 let turn = spread * rng.symmetric();
@@ -440,15 +432,22 @@ impl JointFamily {
                 let (t_lo, t_hi) = along(d);
                 let period = length + bridge;
                 let phase = period * 0.5 * (1.0 + rng.symmetric());
-                let first = ((t_lo - phase - length) / period).floor() as i64;
-                let last = ((t_hi - phase) / period).ceil() as i64;
-                (first..=last)
+                let first = ((t_lo - phase - length) / period).floor();
+                let last = ((t_hi - phase) / period).ceil();
+                let count = (last - first + 1.0).max(0.0);
+                if !count.is_finite() || traces_made as f64 + count > max as f64 {
+                    return Err(JointSetError::TooMany { set, max });
+                }
+                let (first, last) = (first as i64, last as i64);
+                traces_made += count as usize;
+                Ok((first..=last)
                     .map(|k| {
                         let a = phase + k as f64 * period;
                         [a, a + length]
                     })
-                    .collect()
+                    .collect())
             });
+            let traces = traces.transpose()?;
             out.push(Joint { line, set, traces });
         }
         Ok(out)
@@ -580,32 +579,48 @@ pub fn cut_mass(
         }
         cells = next;
     }
-    // 3. Cuts across the joint at each trace end lying within a part's face.
-    for (index, joint) in joints.iter().enumerate() {
-        if joint.traces.is_none() {
+    // 3. Cuts across the joint at each trace end lying within a part's face, part by
+    // part (each part is split at the first such end, and its pieces looked at again).
+    let tips: Vec<Vec<f64>> = joints
+        .iter()
+        .map(|j| {
+            let mut t: Vec<f64> = j
+                .traces
+                .iter()
+                .flatten()
+                .flat_map(|&[a, b]| [a, b])
+                .collect();
+            t.sort_by(f64::total_cmp);
+            t
+        })
+        .collect();
+    let mut stack: Vec<Cell> = cells.drain(..).rev().collect();
+    while let Some(cell) = stack.pop() {
+        let Some((j, t)) = first_tip_inside(&cell, joints, &tips, eps) else {
+            cells.push(cell);
+            continue;
+        };
+        let across = Line {
+            normal: joints[j].direction(),
+            offset: t,
+        };
+        let mut pieces = Vec::with_capacity(2);
+        let copy = Cell {
+            poly: cell.poly.clone(),
+            faces: cell.faces.clone(),
+        };
+        split_cell(cell, &across, Face::Tip, eps, &mut pieces).map_err(|error| {
+            JointSetError::Piece {
+                set: joints[j].set,
+                error,
+            }
+        })?;
+        if pieces.len() < 2 {
+            // Rounding left no second piece: the end is at a corner after all.
+            cells.push(copy);
             continue;
         }
-        let d = joint.direction();
-        for tip in joint.tips() {
-            let across = Line {
-                normal: d,
-                offset: d.dot(tip),
-            };
-            let mut next = Vec::with_capacity(cells.len() + 2);
-            for cell in cells.drain(..) {
-                if !tip_inside_face(&cell, index, tip, eps) {
-                    next.push(cell);
-                    continue;
-                }
-                split_cell(cell, &across, Face::Tip, eps, &mut next).map_err(|error| {
-                    JointSetError::Piece {
-                        set: joint.set,
-                        error,
-                    }
-                })?;
-            }
-            cells = next;
-        }
+        stack.extend(pieces.into_iter().rev());
     }
     // 4. Glue across intact faces; merge glued parts whose union is convex.
     let mut glue = glued_pairs(&cells, joints, eps);
@@ -731,16 +746,26 @@ fn chord(poly: &ConvexPolygon, line: &Line) -> Option<(f64, f64)> {
     })
 }
 
-/// Whether `tip` lies inside (not at an end of) an edge of `cell` along joint `index`.
-fn tip_inside_face(cell: &Cell, index: usize, tip: DVec2, eps: f64) -> bool {
+/// The first trace end (joint, position along it) lying inside (more than `eps` from
+/// either end of) an edge of `cell` made by that joint.
+fn first_tip_inside(
+    cell: &Cell,
+    joints: &[Joint],
+    tips: &[Vec<f64>],
+    eps: f64,
+) -> Option<(usize, f64)> {
     let v = cell.poly.vertices();
     let n = v.len();
-    (0..n).any(|i| {
-        if cell.faces[i] != Face::Joint(index) {
-            return false;
-        }
-        let (a, b) = (v[i], v[(i + 1) % n]);
-        point_segment_distance(tip, a, b) <= eps && tip.distance(a) > eps && tip.distance(b) > eps
+    (0..n).find_map(|i| {
+        let Face::Joint(j) = cell.faces[i] else {
+            return None;
+        };
+        let d = joints[j].direction();
+        let (ta, tb) = (d.dot(v[i]), d.dot(v[(i + 1) % n]));
+        let (lo, hi) = (ta.min(tb) + eps, ta.max(tb) - eps);
+        let t = &tips[j];
+        let k = t.partition_point(|&x| x <= lo);
+        t.get(k).copied().filter(|&x| x < hi).map(|x| (j, x))
     })
 }
 
