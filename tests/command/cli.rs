@@ -1197,3 +1197,49 @@ fn build_writes_the_explicit_scene_and_a_run_records_it() {
     };
     assert_eq!(history(&first), history(&second));
 }
+
+/// An excavation: `summary.json` lists what it removed and when, its `blocks` only those
+/// present at the end; the frames after it draw the removed pieces no more, and `dda
+/// render` redraws the run from them; the recorded `scene.json` runs to the same history.
+#[test]
+fn an_excavation_is_reported_and_its_run_renders_and_repeats() {
+    let dir = scratch("excavation");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/excavation.toml");
+    let out = dir.join("out");
+    let o = run_file(Path::new(scene), &out, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = summary(&out);
+    let removed = s["removed"].as_array().unwrap();
+    assert_eq!(removed.len(), 1);
+    assert_eq!(removed[0]["id"], "wall.2.6");
+    assert_eq!(removed[0]["t"], 0.05);
+    let ids: Vec<&str> = s["blocks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|b| b["id"].as_str().unwrap())
+        .collect();
+    assert!(
+        !ids.contains(&"wall.2.6") && ids.contains(&"wall.2.5"),
+        "{ids:?}"
+    );
+    let frames = std::fs::read_to_string(out.join("frames.jsonl")).unwrap();
+    let last: serde_json::Value = serde_json::from_str(frames.lines().last().unwrap()).unwrap();
+    let first: serde_json::Value = serde_json::from_str(frames.lines().next().unwrap()).unwrap();
+    // Block 7 of the scene as run (the ground, then wall.1, wall.2.1, ...) is wall.2.6.
+    assert!(!first["blocks"][7].as_array().unwrap().is_empty());
+    assert!(last["blocks"][7].as_array().unwrap().is_empty());
+    let o = dda(&["render", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let again = dir.join("again");
+    let o = run_file(&out.join("scene.json"), &again, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let cut = |p: &Path| -> Vec<String> {
+        std::fs::read_to_string(p.join("history.csv"))
+            .unwrap()
+            .lines()
+            .map(|l| l.split(',').take(9).collect::<Vec<_>>().join(","))
+            .collect()
+    };
+    assert_eq!(cut(&out), cut(&again));
+}

@@ -302,3 +302,60 @@ fn columns_on_a_stepped_base_topple_below_the_limit_equilibrium_friction() {
         assert!(t > 10.0, "turns {turns:?} at phi_c - 5 = {}", phi_c - 5.0);
     }
 }
+
+/// `examples/tunnel.toml` with frictionless, persistent joints: before the excavation
+/// (t = 0.25 s) the confined mass only settles (no block moves by 5 mm); after it, the
+/// key block of the roof falls into the opening, at least half as far as a free fall
+/// in the remaining 0.5 s, g t^2 / 2 = 1.23 m. The removed pieces are those inside
+/// the tunnel's outline, and none other.
+#[test]
+fn rock_above_an_excavation_falls_after_it_and_not_before() {
+    let text = include_str!("../../examples/tunnel.toml")
+        .replace("friction_deg = 30.0", "friction_deg = 0.0")
+        .lines()
+        .filter(|l| {
+            !["trace_length", "bridge", "seed"]
+                .iter()
+                .any(|k| l.starts_with(k))
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let (scene, model) = Scene::parse(&text, Format::Toml, "tunnel.toml").unwrap();
+    let at = scene.excavations[0].at;
+    let tunnel = dda::geom::Outline::new(
+        scene.excavations[0]
+            .vertices
+            .iter()
+            .map(|&v| DVec2::from(v))
+            .collect(),
+    )
+    .unwrap();
+    for b in &model.blocks {
+        let inside = tunnel.contains(b.polygon.centroid());
+        assert_eq!(b.removed_at.is_some(), inside, "{}", b.id);
+    }
+    let start: Vec<DVec2> = model.blocks.iter().map(|b| b.polygon.centroid()).collect();
+    let mut sim = Simulation::new(model, RunOptions::default());
+    let mut before = 0.0f64;
+    while !sim.finished() {
+        sim.step().unwrap();
+        if sim.time() <= at {
+            for (i, b) in sim.blocks().iter().enumerate() {
+                before = before.max((b.polygon.centroid() - start[i]).length());
+            }
+        }
+    }
+    assert!(before < 5e-3, "moved {before} m before the excavation");
+    let fell = sim
+        .blocks()
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| !sim.is_removed(i))
+        .map(|(i, b)| start[i].y - b.polygon.centroid().y)
+        .fold(0.0, f64::max);
+    let free_fall = 0.5 * 9.81 * (0.75 - at) * (0.75 - at);
+    assert!(
+        fell > 0.5 * free_fall,
+        "fell {fell} m, a free fall {free_fall} m"
+    );
+}

@@ -12,8 +12,13 @@ const SLIDING_BLOCK: &str = concat!(
     "/tests/scenes/sliding-block.toml"
 );
 
+/// A wall notched by an excavation halfway through the run: resumed before it and
+/// after it.
+const EXCAVATION: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/excavation.toml");
+
 fn scenes() -> Vec<Scene> {
     let mut v = vec![Scene::load(Path::new(SLIDING_BLOCK)).unwrap().0];
+    v.push(Scene::load(Path::new(EXCAVATION)).unwrap().0);
     for name in ["paper-5.1a-column-20", "paper-4.1-sharp-corners"] {
         v.push(dda_bench::builtin(name).unwrap());
     }

@@ -56,6 +56,7 @@ fn scene(name: &str, analysis: Analysis, friction_deg: f64, blocks: Vec<BlockSpe
         blocks,
         joint_sets: BTreeMap::new(),
         regions: Vec::new(),
+        excavations: Vec::new(),
     }
 }
 

@@ -84,6 +84,7 @@ pub fn column_scene(name: &str, blocks: &[ConvexPolygon], analysis: Analysis) ->
         blocks: specs,
         joint_sets: BTreeMap::new(),
         regions: Vec::new(),
+        excavations: Vec::new(),
     }
 }
 

@@ -209,6 +209,7 @@ pub fn collision_scene(
         blocks: vec![block("A", a, false), block("B", b, true)],
         joint_sets: BTreeMap::new(),
         regions: Vec::new(),
+        excavations: Vec::new(),
     }
 }
 

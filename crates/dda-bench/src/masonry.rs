@@ -167,6 +167,7 @@ impl Masonry {
             blocks,
             joint_sets: BTreeMap::new(),
             regions: Vec::new(),
+            excavations: Vec::new(),
         }
     }
 }

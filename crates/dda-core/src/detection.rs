@@ -30,10 +30,11 @@ impl Simulation {
             self.detection.d_tol,
             &mut self.scratch.pairs,
         );
-        let free = &self.free;
-        self.scratch
-            .pairs
-            .retain(|p| free[p.a as usize].is_some() || free[p.b as usize].is_some());
+        let (free, removed) = (&self.free, &self.removed);
+        self.scratch.pairs.retain(|p| {
+            let (a, b) = (p.a as usize, p.b as usize);
+            (free[a].is_some() || free[b].is_some()) && !removed[a] && !removed[b]
+        });
         std::mem::swap(&mut self.scratch.prev, &mut self.state.contacts);
         dda_contact::detect(
             self.detector.as_ref(),

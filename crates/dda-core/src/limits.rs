@@ -132,6 +132,12 @@ pub const FORCE: Range = Range {
 /// Nesting depth of arrays and tables beyond which a scene file is refused before it
 /// is parsed (a scene needs 4: `blocks[i].loads[j].at`).
 pub const MAX_NESTING: usize = 64;
+/// `blocks[].removed_at`, s: a time of the run.
+pub const REMOVAL: Range = Range {
+    min: 0.0,
+    max: 1e7,
+    unit: "s",
+};
 /// Most blocks the `[[regions]]` of a scene may be cut into, estimated before cutting
 /// from the joints crossing each region (a spacing typed in mm for m would otherwise
 /// cut for hours and exhaust memory).

@@ -20,7 +20,7 @@ impl Scene {
     /// is explicit, else its regions cut into blocks (what `dda build` writes and a run
     /// records), so that the cutting is done once.
     pub fn build(&self) -> Result<(Cow<'_, Scene>, Model), Invalid> {
-        if self.regions.is_empty() && self.joint_sets.is_empty() {
+        if self.regions.is_empty() && self.joint_sets.is_empty() && self.excavations.is_empty() {
             return Ok((Cow::Borrowed(self), self.validate_blocks()?));
         }
         let (scene, dropped) = crate::regions::expand(self)?;
@@ -64,6 +64,7 @@ impl Scene {
             .flat_map(|b| b.edge_joints.iter().map(String::as_str))
             .collect();
         let mut by_name: BTreeMap<&str, u16> = BTreeMap::new();
+        let mut unused = Vec::new();
         by_name.insert("default", 0);
         let nm = names.len();
         let mut joints = vec![JointProps::default()];
@@ -85,10 +86,11 @@ impl Scene {
             let Some([m1, m2]) = &j.between else {
                 // A joint that applies only where named: by blocks' `edge_joints`.
                 if !named.contains(name.as_str()) {
-                    return Err(invalid(
+                    unused.push(invalid(
                         format!("{key}.between"),
-                        "a joint other than `default` needs `between = [material, material]`, \
-                         or to be named by a joint set's `joint` or a block's `edge_joints`",
+                        "this joint applies nowhere: a joint other than `default` applies \
+                         between the materials of its `between = [material, material]`, or \
+                         where a joint set's `joint` or a block's `edge_joints` names it",
                     ));
                 }
                 joints.push(j.validate(&key)?);
@@ -197,6 +199,15 @@ impl Scene {
             }
             blocks.push(block);
         }
+        if blocks.iter().all(|b| b.fixed || b.removed_at.is_some())
+            && let Some(i) = blocks.iter().position(|b| !b.fixed)
+        {
+            return Err(invalid(
+                format!("blocks[{i}].removed_at"),
+                "every free block is removed (excavated) during the run, which leaves \
+                 nothing to move: excavate less, or add the rock around the excavation",
+            ));
+        }
         if blocks.iter().all(|b| b.fixed) {
             return Err(invalid(
                 "blocks",
@@ -209,6 +220,7 @@ impl Scene {
             check_static_support(&blocks, params.d_tol)?;
         }
         let mut warnings = unit_slips(self);
+        warnings.append(&mut unused);
         if params.d_tol < 2.0 * params.d_max {
             warnings.push(invalid(
                 "analysis.contact_tolerance",
@@ -585,6 +597,8 @@ pub struct ModelBlock {
     pub edge_joints: Vec<Option<u16>>,
     /// The body this block is a part of (glued to the other parts), by index.
     pub body: Option<u32>,
+    /// When the block is removed (excavated), s.
+    pub removed_at: Option<f64>,
 }
 
 impl BlockSpec {
@@ -627,6 +641,10 @@ impl BlockSpec {
             fixed_points,
             edge_joints: Vec::new(),
             body: None,
+            removed_at: match self.removed_at {
+                Some(t) => Some(within(&format!("{key}.removed_at"), t, &limits::REMOVAL)?),
+                None => None,
+            },
         })
     }
 }

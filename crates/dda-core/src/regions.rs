@@ -9,10 +9,10 @@
 
 use crate::limits;
 use crate::model::start_overlap;
-use crate::scene::{BlockSpec, Invalid, JointSetSpec, Scene, invalid};
+use crate::scene::{BlockSpec, ExcavationSpec, Invalid, JointSetSpec, Scene, invalid};
 use dda_geom::{
-    Aabb, ConvexPolygon, DVec2, JointFamily, JointSet, JointSetError, Outline, PolygonError,
-    cut_mass, separation,
+    Aabb, ConvexPolygon, DVec2, Joint, JointFamily, JointSet, JointSetError, Line, Outline,
+    PolygonError, cut_mass, separation,
 };
 use std::collections::BTreeMap;
 
@@ -130,8 +130,8 @@ fn names_or_none<'a>(names: impl Iterator<Item = &'a str>) -> String {
     }
 }
 
-/// The outline of region `key` (a simple polygon, counter-clockwise), its errors naming
-/// the vertex.
+/// The outline of region (or excavation) `key` (a simple polygon, counter-clockwise),
+/// its errors naming the vertex.
 fn region_outline(key: &str, id: &str, vertices: &[[f64; 2]]) -> Result<Outline, Invalid> {
     for (i, v) in vertices.iter().enumerate() {
         for (k, &c) in v.iter().enumerate() {
@@ -159,7 +159,12 @@ fn region_outline(key: &str, id: &str, vertices: &[[f64; 2]]) -> Result<Outline,
             }
             _ => "",
         };
-        invalid(at, format!("region `{id}`: {e}{hint}"))
+        let what = if key.starts_with("excavations") {
+            "excavation"
+        } else {
+            "region"
+        };
+        invalid(at, format!("{what} `{id}`: {e}{hint}"))
     })
 }
 
@@ -338,5 +343,173 @@ pub fn expand(scene: &Scene) -> Result<(Scene, Dropped), Invalid> {
             }
         }
     }
+    let excavations = std::mem::take(&mut out.excavations);
+    for (x, e) in excavations.iter().enumerate() {
+        excavate(&mut out, x, e)?;
+    }
     Ok((out, dropped))
+}
+
+/// Cuts every block of `scene` that excavation `x` crosses along its outline, and marks
+/// the pieces inside it `removed_at = at`. The pieces of one block stay one body, glued
+/// (the rock is intact across the outline until the excavation), and take the block's
+/// velocity, stress and edge joints; its loads and fixed points go to the piece that
+/// holds them.
+fn excavate(scene: &mut Scene, x: usize, e: &ExcavationSpec) -> Result<(), Invalid> {
+    let key = format!("excavations[{x}]");
+    if e.id.trim().is_empty() {
+        return Err(invalid(format!("{key}.id"), "must not be empty"));
+    }
+    let duration = scene.analysis.duration;
+    if !(e.at.is_finite() && e.at >= 0.0 && e.at <= duration) {
+        return Err(invalid(
+            format!("{key}.at"),
+            format!(
+                "must be a time in s from 0 to the run's duration ({duration} s), got {}",
+                e.at
+            ),
+        ));
+    }
+    let outline = region_outline(&key, &e.id, &e.vertices)?;
+    let v = outline.vertices();
+    let n = v.len();
+    // Each edge of the outline is a joint whose one trace is that edge.
+    let joints: Vec<Joint> = (0..n)
+        .map(|k| {
+            let (a, b) = (v[k], v[(k + 1) % n]);
+            let line = Line::through(a, b - a);
+            let d = DVec2::new(line.normal.y, -line.normal.x);
+            let (ta, tb) = (d.dot(a), d.dot(b));
+            Joint {
+                line,
+                set: 0,
+                traces: Some(vec![[ta.min(tb), ta.max(tb)]]),
+            }
+        })
+        .collect();
+    let bounds = outline.aabb();
+    let mut removes = false;
+    let blocks = std::mem::take(&mut scene.blocks);
+    for b in blocks {
+        let Ok(poly) = ConvexPolygon::from_coords(&b.vertices) else {
+            // Validation names what is wrong with it.
+            scene.blocks.push(b);
+            continue;
+        };
+        let bb = poly.aabb();
+        let apart = bb.min.x >= bounds.max.x
+            || bb.max.x <= bounds.min.x
+            || bb.min.y >= bounds.max.y
+            || bb.max.y <= bounds.min.y;
+        let Ok(shape) = Outline::new(poly.vertices().to_vec()) else {
+            scene.blocks.push(b);
+            continue;
+        };
+        if apart {
+            scene.blocks.push(b);
+            continue;
+        }
+        let cut = cut_mass(&shape, &joints, 0.0).map_err(|err| {
+            invalid(
+                format!("{key}.vertices"),
+                format!("excavation `{}` cutting block `{}`: {err}", e.id, b.id),
+            )
+        })?;
+        let removal = |inside: bool| {
+            if inside {
+                Some(b.removed_at.map_or(e.at, |t| t.min(e.at)))
+            } else {
+                b.removed_at
+            }
+        };
+        let inside = |p: &dda_geom::Piece| outline.contains(p.parts[0].centroid());
+        if cut.pieces.len() == 1 && cut.pieces[0].parts.len() == 1 {
+            removes |= inside(&cut.pieces[0]);
+            scene.blocks.push(BlockSpec {
+                removed_at: removal(inside(&cut.pieces[0])),
+                ..b
+            });
+            continue;
+        }
+        let body = b.body.clone().unwrap_or_else(|| b.id.clone());
+        let eps = 1e-9 * poly.diameter();
+        let mut m = 0;
+        for piece in &cut.pieces {
+            let gone = inside(piece);
+            removes |= gone;
+            for part in &piece.parts {
+                m += 1;
+                let pv = part.vertices();
+                let holds = |q: DVec2| {
+                    (0..pv.len()).all(|k| {
+                        let (a, c) = (pv[k], pv[(k + 1) % pv.len()]);
+                        (c - a).perp_dot(q - a) >= -eps * (c - a).length()
+                    })
+                };
+                let mut loads = Vec::new();
+                for l in &b.loads {
+                    if holds(DVec2::from(l.at)) && !claimed(&scene.blocks, &b.id, l.at) {
+                        loads.push(l.clone());
+                    }
+                }
+                let fixed_points: Vec<[f64; 2]> = b
+                    .fixed_points
+                    .iter()
+                    .filter(|&&q| holds(DVec2::from(q)))
+                    .copied()
+                    .collect();
+                let edge_joints = if b.edge_joints.is_empty() {
+                    Vec::new()
+                } else {
+                    (0..pv.len())
+                        .map(|k| {
+                            original_edge(&poly, pv[k], pv[(k + 1) % pv.len()], eps)
+                                .and_then(|o| b.edge_joints.get(o).cloned())
+                                .unwrap_or_default()
+                        })
+                        .collect()
+                };
+                scene.blocks.push(BlockSpec {
+                    id: format!("{}.{m}", b.id),
+                    vertices: pv.iter().map(|p| [p.x, p.y]).collect(),
+                    loads,
+                    fixed_points,
+                    edge_joints,
+                    body: Some(body.clone()),
+                    removed_at: removal(gone),
+                    ..b.clone()
+                });
+            }
+        }
+    }
+    if !removes {
+        return Err(invalid(
+            format!("{key}.vertices"),
+            format!(
+                "excavation `{}` removes no rock: its outline lies outside every block",
+                e.id
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Whether a load at `at` of block `id` went to an earlier piece of it already (a load
+/// on the line between two pieces goes to the first).
+fn claimed(blocks: &[BlockSpec], id: &str, at: [f64; 2]) -> bool {
+    let prefix = format!("{id}.");
+    blocks
+        .iter()
+        .rev()
+        .take_while(|b| b.id.starts_with(&prefix))
+        .any(|b| b.loads.iter().any(|l| l.at == at))
+}
+
+/// The edge of `poly` that the segment a-b lies along, if any.
+fn original_edge(poly: &ConvexPolygon, a: DVec2, b: DVec2, eps: f64) -> Option<usize> {
+    (0..poly.len()).find(|&k| {
+        let (p, q) = poly.edge(k);
+        let d = (q - p).normalize();
+        d.perp_dot(a - p).abs() <= eps && d.perp_dot(b - p).abs() <= eps && d.dot(b - a) > 0.0
+    })
 }

@@ -33,6 +33,23 @@ pub struct Scene {
     /// Regions of rock cut by joint sets into blocks.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub regions: Vec<RegionSpec>,
+    /// Outlines excavated during the run.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub excavations: Vec<ExcavationSpec>,
+}
+
+/// An `[[excavations]]` entry: the blocks are cut along the outline before the run, and
+/// the pieces inside it are removed at time `at`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExcavationSpec {
+    /// Its name, for messages.
+    pub id: String,
+    /// Outline `[x, y]`, counter-clockwise, a simple polygon.
+    #[serde(deserialize_with = "exact::list")]
+    pub vertices: Vec<[f64; 2]>,
+    /// When the rock inside is removed, s.
+    pub at: f64,
 }
 
 /// A `[joint_sets.NAME]` entry: a family of joints, parallel and persistent unless its
@@ -279,6 +296,9 @@ pub struct BlockSpec {
     /// where they touch (bonded contacts that never open or slide).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub body: Option<String>,
+    /// When the block is removed (excavated), s; absent, never.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub removed_at: Option<f64>,
 }
 
 /// A scene that could not be read or is invalid: where, and what is wrong.

@@ -46,6 +46,10 @@ pub struct Simulation {
     pub(crate) material: Vec<u32>,
     /// Block index of each free block: the inverse of `free`.
     pub(crate) free_blocks: Vec<u32>,
+    /// Whether each block has been removed (excavated): out of detection and the system,
+    /// its state frozen. A function of the time: the blocks whose `removed_at` is at
+    /// or before it (`Simulation::remove_due`).
+    pub(crate) removed: Vec<bool>,
     pub(crate) n_free: usize,
     /// Energy below the model's resolution, added to the guard's reference (see
     /// `guard`): every free block lowered by d_tol, and a spring over the start overlap.
@@ -209,7 +213,7 @@ impl Simulation {
             }
         }
         let dt0 = p.dt0;
-        Simulation {
+        let mut sim = Simulation {
             nd: effects.dofs_per_block(),
             model,
             effects,
@@ -220,6 +224,7 @@ impl Simulation {
                 .filter(|&i| free[i as usize].is_some())
                 .collect(),
             material,
+            removed: vec![false; free.len()],
             free,
             n_free: n_free as usize,
             energy_floor,
@@ -269,7 +274,57 @@ impl Simulation {
                 diagnosis: None,
                 gains: Vec::new(),
             },
+        };
+        sim.remove_due(0.0);
+        sim
+    }
+
+    /// Removes the blocks whose `removed_at` is at or before `t` and not removed yet: they
+    /// leave the system (the free blocks are numbered again and the matrix pattern is
+    /// made anew) and the contact search; their state stays as it was, at rest.
+    pub(crate) fn remove_due(&mut self, t: f64) {
+        let due: Vec<usize> = (0..self.removed.len())
+            .filter(|&i| {
+                !self.removed[i] && self.model.blocks[i].removed_at.is_some_and(|at| at <= t)
+            })
+            .collect();
+        if due.is_empty() {
+            return;
         }
+        for &i in &due {
+            self.removed[i] = true;
+            self.state.blocks[i].velocity = [0.0; 6];
+        }
+        let mut n = 0u32;
+        for (i, f) in self.free.iter_mut().enumerate() {
+            *f = if self.model.blocks[i].fixed || self.removed[i] {
+                None
+            } else {
+                n += 1;
+                Some(n - 1)
+            };
+        }
+        self.n_free = n as usize;
+        self.free_blocks = (0..self.free.len() as u32)
+            .filter(|&i| self.free[i as usize].is_some())
+            .collect();
+        self.state.pattern.clear();
+    }
+
+    /// The time the next step must land on: the run's end, or an excavation before it.
+    pub(crate) fn next_event(&self) -> f64 {
+        let t = self.state.t;
+        self.model
+            .blocks
+            .iter()
+            .zip(&self.removed)
+            .filter_map(|(b, &gone)| b.removed_at.filter(|&at| !gone && at > t))
+            .fold(self.model.params.duration, f64::min)
+    }
+
+    /// Whether block `i` has been removed (excavated).
+    pub fn is_removed(&self, i: usize) -> bool {
+        self.removed[i]
     }
 
     /// Violations of physics recorded so far by a run that goes on through them
@@ -362,8 +417,10 @@ impl Simulation {
         let mut last_dt = self.state.dt;
         let mut worst = None;
         let result = self.try_step(&mut last_dt, &mut worst);
-        if let Err(e) = &result {
-            self.diagnose(e, last_dt, worst);
+        match &result {
+            Err(e) => self.diagnose(e, last_dt, worst),
+            // Excavations take effect at the end of the step that reaches them.
+            Ok(_) => self.remove_due(self.state.t),
         }
         result
     }
@@ -386,9 +443,11 @@ impl Simulation {
         watch.lap(&mut rec, Phase::Assembly);
         self.scratch.saved.clone_from(&self.state.contacts.contacts);
         let p = &self.model.params;
-        let (duration, d_max, theta_max, max_oci, dt0) =
+        let (_, d_max, theta_max, max_oci, dt0) =
             (p.duration, p.d_max, p.theta_max, p.max_oci, p.dt0);
-        let remaining = duration - self.state.t;
+        // The step lands on the run's end and on every excavation's time.
+        let target = self.next_event();
+        let remaining = target - self.state.t;
         // The step respects the motion it starts with: no block's current velocity may
         // carry a vertex beyond d_max, or turn it beyond theta_max, within it.
         let planned = self.state.dt.min(self.velocity_room());
@@ -422,7 +481,7 @@ impl Simulation {
                     let growth = step_growth(iterations, max_oci, disp, rot, d_max, theta_max);
                     self.accept(dt, &mut rec)?;
                     if landing {
-                        self.state.t = duration;
+                        self.state.t = target;
                     } else {
                         self.state.dt = (dt * growth).min(dt0);
                     }

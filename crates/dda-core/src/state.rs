@@ -200,6 +200,8 @@ impl Simulation {
         if !(ranges_fit && c.contacts.iter().all(|x| fits(&x.key))) {
             return Err("its contacts do not fit the scene's blocks".into());
         }
+        // The blocks excavated by the checkpoint's time are out of the system it saved.
+        sim.remove_due(snap.t);
         let nf = sim.n_free as u32;
         if !snap.pattern.windows(2).all(|w| w[0] < w[1])
             || !snap.pattern.iter().all(|&(a, b)| a < b && b < nf)

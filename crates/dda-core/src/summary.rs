@@ -81,8 +81,20 @@ pub struct Summary {
     /// Violations of physics a run went on through (`--keep-going`), in words.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
-    /// Blocks at the end.
+    /// Blocks at the end (those an excavation removed are in `removed` instead).
     pub blocks: Vec<BlockSummary>,
+    /// Blocks an excavation removed, with the time they went.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub removed: Vec<Removed>,
+}
+
+/// A block removed by an excavation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Removed {
+    /// Block id.
+    pub id: String,
+    /// When it was removed, s.
+    pub t: f64,
 }
 
 impl Summary {
@@ -128,12 +140,25 @@ impl Summary {
             max_penetration: t.max_penetration,
             energy_excess: sim.energy_balance().worst_ratio,
             warnings: sim.violations().iter().map(|v| v.warning()).collect(),
+            removed: sim
+                .model()
+                .blocks
+                .iter()
+                .enumerate()
+                .filter(|&(i, _)| sim.is_removed(i))
+                .map(|(_, m)| Removed {
+                    id: m.id.clone(),
+                    t: m.removed_at.unwrap_or_default(),
+                })
+                .collect(),
             blocks: sim
                 .model()
                 .blocks
                 .iter()
                 .zip(sim.blocks())
-                .map(|(m, b)| {
+                .enumerate()
+                .filter(|&(i, _)| !sim.is_removed(i))
+                .map(|(_, (m, b))| {
                     let c = b.polygon.centroid();
                     BlockSummary {
                         id: m.id.clone(),

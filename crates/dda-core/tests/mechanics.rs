@@ -102,6 +102,7 @@ fn free_fall_is_exact() {
         blocks: vec![b],
         joint_sets: Default::default(),
         regions: Vec::new(),
+        excavations: Vec::new(),
     };
     let sim = run(&scene);
     let t = sim.time();
@@ -147,6 +148,7 @@ fn incline_scene(deg: f64, friction_deg: f64) -> (Scene, glam::DVec2) {
         blocks: vec![base, slider],
         joint_sets: Default::default(),
         regions: Vec::new(),
+        excavations: Vec::new(),
     };
     (scene, u)
 }
@@ -204,6 +206,7 @@ fn collision_scene() -> Scene {
         blocks: vec![a, b],
         joint_sets: Default::default(),
         regions: Vec::new(),
+        excavations: Vec::new(),
     }
 }
 
@@ -290,6 +293,7 @@ fn stack_of_ten_blocks_stands() {
         blocks,
         joint_sets: Default::default(),
         regions: Vec::new(),
+        excavations: Vec::new(),
     };
     let starts: Vec<_> = scene
         .validate()

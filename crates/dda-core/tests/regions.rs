@@ -272,3 +272,50 @@ fn regions_written_to_six_decimals_may_share_an_edge() {
     assert_ne!(text, SLOPE);
     Scene::parse(&text, Format::Toml, "slope.toml").expect("a shared edge, rounded");
 }
+
+/// Bad excavations are refused with their key and line: a time after the run, an outline
+/// that removes nothing, one that crosses itself.
+#[test]
+fn bad_excavations_are_named_with_key_and_line() {
+    let cases = [
+        (
+            "at = 0.6\nvertices = [[10.0, 1.0], [12.0, 1.0], [12.0, 3.0], [10.0, 3.0]]",
+            "excavations[0].at",
+            "duration",
+        ),
+        (
+            "at = 0.1\nvertices = [[100.0, 1.0], [102.0, 1.0], [102.0, 3.0], [100.0, 3.0]]",
+            "excavations[0].vertices",
+            "removes no rock",
+        ),
+        (
+            "at = 0.1\nvertices = [[10.0, 1.0], [12.0, 3.0], [12.0, 1.0], [10.0, 3.0]]",
+            "excavations[0].vertices[0]",
+            "crosses",
+        ),
+    ];
+    for (body, key, words) in cases {
+        let text = format!("{SLOPE}\n[[excavations]]\nid = \"pit\"\n{body}\n");
+        let e = error(&text);
+        assert_eq!(e.key, key, "{e}");
+        assert!(e.message.contains(words), "{e}");
+        assert!(e.line.is_some(), "{e}");
+    }
+    // A good one: the pieces inside are removed at its time, the rest are not.
+    let text = format!(
+        "{SLOPE}\n[[excavations]]\nid = \"pit\"\nat = 0.1\nvertices = [[10.0, 1.0], \
+         [12.0, 1.0], [12.0, 3.0], [10.0, 3.0]]\n"
+    );
+    let (scene, _) = Scene::parse(&text, Format::Toml, "slope.toml").unwrap();
+    let explicit = scene.expanded().unwrap();
+    let removed: f64 = explicit
+        .blocks
+        .iter()
+        .filter(|b| b.removed_at == Some(0.1))
+        .map(|b| ConvexPolygon::from_coords(&b.vertices).unwrap().area())
+        .sum();
+    assert!(
+        (removed - 4.0).abs() < 1e-9,
+        "removed {removed} m^2 of a 2 x 2 m pit"
+    );
+}

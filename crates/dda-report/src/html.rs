@@ -175,7 +175,7 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
 <input id="slider" type="range" min="0" max="{}" value="0" step="1" aria-label="time">
 <span id="time"></span></div>
 <canvas id="view" width="{cw:.0}" height="{ch:.0}"></canvas>
-<p>Blocks coloured by speed, from blue (at rest) to red (<span id="vmax"></span> m/s); fixed blocks grey; red dots: active closed contacts.</p>"#,
+<p>Blocks coloured by speed, from blue (at rest) to red (<span id="vmax"></span> m/s); fixed blocks grey; red dots: active closed contacts; dashed: the rock an excavation removes.</p>"#,
         r.frames.len().saturating_sub(1)
     );
 
@@ -277,6 +277,21 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
         "fixed": r.model.blocks.iter().map(|b| b.fixed).collect::<Vec<_>>(),
         "ids": r.model.blocks.iter().map(|b| b.id.as_str()).collect::<Vec<_>>(),
         "frames": r.frames,
+        // The blocks excavations remove, as they stood at the start: their outlines are
+        // drawn dashed throughout, so the excavation shows before and after.
+        "excavated": r
+            .model
+            .blocks
+            .iter()
+            .filter(|b| b.removed_at.is_some())
+            .map(|b| {
+                b.polygon
+                    .vertices()
+                    .iter()
+                    .flat_map(|v| [v.x, v.y])
+                    .collect::<Vec<f64>>()
+            })
+            .collect::<Vec<_>>(),
     });
     // "</" cannot appear inside a script element.
     let data = data.to_string().replace("</", "<\\/");
@@ -350,6 +365,18 @@ const SCRIPT: &str = r##""use strict";
       ctx.fill();
       ctx.stroke();
     });
+    ctx.setLineDash([4, 3]);
+    ctx.strokeStyle = "#404040";
+    data.excavated.forEach((b) => {
+      ctx.beginPath();
+      for (let j = 0; j < b.length; j += 2) {
+        if (j === 0) ctx.moveTo(px(b[j]), py(b[j + 1]));
+        else ctx.lineTo(px(b[j]), py(b[j + 1]));
+      }
+      ctx.closePath();
+      ctx.stroke();
+    });
+    ctx.setLineDash([]);
     ctx.fillStyle = "#d00000";
     for (let j = 0; j < f.contacts.length; j += 2) {
       ctx.beginPath();

@@ -64,7 +64,8 @@ pub struct Frame {
     pub t: f64,
     /// Whether `frames/` gets an SVG picture of this instant (the scene's `frames`).
     pub svg: bool,
-    /// Each block's vertices, flattened: x0, y0, x1, y1, ...
+    /// Each block's vertices, flattened: x0, y0, x1, y1, ...; none for a block an
+    /// excavation has removed.
     pub blocks: Vec<Vec<f64>>,
     /// Each block's centroid speed, m/s.
     pub speed: Vec<f64>,
@@ -82,7 +83,12 @@ impl Frame {
         let blocks = sim
             .blocks()
             .iter()
-            .map(|b| {
+            .enumerate()
+            .map(|(i, b)| {
+                if sim.is_removed(i) {
+                    // Excavated: drawn no more.
+                    return Vec::new();
+                }
                 b.polygon
                     .vertices()
                     .iter()
@@ -105,7 +111,11 @@ impl Frame {
             })
             .collect();
         let mut contacts = Vec::new();
-        for c in sim.contacts().active().filter(|c| c.state.is_closed()) {
+        for c in sim.contacts().active().filter(|c| {
+            c.state.is_closed()
+                && !sim.is_removed(c.key.vertex_block as usize)
+                && !sim.is_removed(c.key.edge_block as usize)
+        }) {
             let b = &sim.blocks()[c.key.vertex_block as usize];
             if let Some(v) = b.polygon.vertices().get(c.key.vertex as usize) {
                 contacts.extend([round(v.x), round(v.y)]);
@@ -174,6 +184,9 @@ pub fn frame_svg(model: &Model, frame: &Frame, view: &Aabb) -> String {
         frame.t
     );
     for (i, m) in model.blocks.iter().enumerate() {
+        if frame.blocks[i].is_empty() {
+            continue;
+        }
         let fill = if m.fixed { "#b0b0b0" } else { "#e8c890" };
         let pts: Vec<String> = frame
             .polygon(i)
