@@ -9,9 +9,11 @@
 //! - `accuracy`: error against wall time on problems with a closed-form answer, and the
 //!   columns' penetration and energy against time, into `docs/accuracy.md`.
 //! - `target`: the 826-block column's speed targets over an ensemble of trajectories.
+//! - `examples`: every scene of `examples/` run to its end, into `docs/examples.md`.
 
 mod accuracy;
 mod args;
+mod examples;
 mod robustness;
 mod scaling;
 mod sweep;
@@ -52,6 +54,8 @@ enum Task {
     /// The 826-block column's speed over perturbed trajectories (medians, ms per OCI
     /// iteration; with --repeat R each trajectory's fastest of R runs).
     Target(target::Options),
+    /// Every scene of examples/ run to its end, pictured -> docs/examples.md.
+    Examples,
 }
 
 /// Bad options exit 2 (clap's own exit); a study that cannot be made (a trajectory
@@ -69,6 +73,7 @@ fn main() -> ExitCode {
         ),
         Task::Sweep(o) => ("sweep", sweep::run(&root, &o)),
         Task::Target(o) => ("target", target::run(&root, &o)),
+        Task::Examples => ("examples", examples::run(&root)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

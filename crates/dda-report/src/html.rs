@@ -277,6 +277,9 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
         "fixed": r.model.blocks.iter().map(|b| b.fixed).collect::<Vec<_>>(),
         "ids": r.model.blocks.iter().map(|b| b.id.as_str()).collect::<Vec<_>>(),
         "frames": r.frames,
+        // Where each block's outline is drawn (null: whole): parts of a body are drawn
+        // without their glued stretches.
+        "drawn": crate::drawn_edges(r.model),
         // The blocks excavations remove, as they stood at the start: their outlines are
         // drawn dashed throughout, so the excavation shows before and after.
         "excavated": r
@@ -363,6 +366,23 @@ const SCRIPT: &str = r##""use strict";
       ctx.closePath();
       ctx.fillStyle = data.fixed[i] ? "#b0b0b0" : colour(f.speed[i]);
       ctx.fill();
+      const parts = data.drawn[i];
+      if (parts === null) {
+        ctx.stroke();
+        return;
+      }
+      // A part of a body: its fill's colour over the seams, black where not glued.
+      ctx.strokeStyle = ctx.fillStyle;
+      ctx.stroke();
+      ctx.strokeStyle = "#000000";
+      ctx.beginPath();
+      const n = b.length / 2;
+      for (const [e, s0, s1] of parts) {
+        const x0 = b[2 * e], y0 = b[2 * e + 1];
+        const x1 = b[(2 * e + 2) % (2 * n)], y1 = b[(2 * e + 3) % (2 * n)];
+        ctx.moveTo(px(x0 + s0 * (x1 - x0)), py(y0 + s0 * (y1 - y0)));
+        ctx.lineTo(px(x0 + s1 * (x1 - x0)), py(y0 + s1 * (y1 - y0)));
+      }
       ctx.stroke();
     });
     ctx.setLineDash([4, 3]);

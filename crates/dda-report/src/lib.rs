@@ -138,6 +138,63 @@ impl Frame {
     }
 }
 
+/// The stretches of each block's outline to draw, as `(edge, s0, s1)`: edge `edge` from
+/// ratio `s0` to `s1` along it; `None` for a block drawn whole. A block that is a part of
+/// a non-convex body (`body`) is drawn without the stretches where it lies against
+/// another part of its body at the start (the glue is not a joint), so the body shows as
+/// one block. Ratios, so that they follow the blocks as they move and deform.
+pub fn drawn_edges(model: &Model) -> Vec<Option<Vec<(usize, f64, f64)>>> {
+    model
+        .blocks
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let body = b.body?;
+            let p = &b.polygon;
+            let eps = 1e-9 * p.diameter();
+            let mates: Vec<&ConvexPolygon> = model
+                .blocks
+                .iter()
+                .enumerate()
+                .filter(|&(j, m)| j != i && m.body == Some(body))
+                .map(|(_, m)| &m.polygon)
+                .collect();
+            let mut out = Vec::new();
+            for k in 0..p.len() {
+                let (a, c) = p.edge(k);
+                let len = a.distance(c);
+                let d = (c - a) / len;
+                // The stretches of this edge other parts cover, as ratios.
+                let mut covered: Vec<(f64, f64)> = Vec::new();
+                for m in &mates {
+                    for (q0, q1) in m.edges() {
+                        let on = |q: DVec2| d.perp_dot(q - a).abs() <= eps;
+                        if on(q0) && on(q1) && d.dot(q1 - q0) < 0.0 {
+                            let (lo, hi) = (d.dot(q1 - a) / len, d.dot(q0 - a) / len);
+                            let (lo, hi) = (lo.max(0.0), hi.min(1.0));
+                            if hi > lo {
+                                covered.push((lo, hi));
+                            }
+                        }
+                    }
+                }
+                covered.sort_by(|x, y| x.0.total_cmp(&y.0));
+                let mut from = 0.0;
+                for (lo, hi) in covered {
+                    if lo > from {
+                        out.push((k, from, lo));
+                    }
+                    from = f64::max(from, hi);
+                }
+                if from < 1.0 {
+                    out.push((k, from, 1.0));
+                }
+            }
+            Some(out)
+        })
+        .collect()
+}
+
 /// The box every frame of a run shows: the free blocks' extent at the start with a
 /// margin of a quarter of its size (room to move), or every block's if none is free.
 pub fn frame_view(model: &Model) -> Aabb {
@@ -183,21 +240,40 @@ pub fn frame_svg(model: &Model, frame: &Frame, view: &Aabb) -> String {
         escape(&model.name),
         frame.t
     );
+    let drawn = drawn_edges(model);
     for (i, m) in model.blocks.iter().enumerate() {
         if frame.blocks[i].is_empty() {
             continue;
         }
         let fill = if m.fixed { "#b0b0b0" } else { "#e8c890" };
-        let pts: Vec<String> = frame
-            .polygon(i)
-            .map(|v| format!("{},{}", v.x, -v.y))
-            .collect();
-        let _ = writeln!(
-            s,
-            r#"<polygon fill="{fill}" points="{}"><title>{}</title></polygon>"#,
-            pts.join(" "),
-            escape(&m.id)
-        );
+        let v: Vec<DVec2> = frame.polygon(i).collect();
+        let pts: Vec<String> = v.iter().map(|v| format!("{},{}", v.x, -v.y)).collect();
+        match &drawn[i] {
+            None => {
+                let _ = writeln!(
+                    s,
+                    r#"<polygon fill="{fill}" points="{}"><title>{}</title></polygon>"#,
+                    pts.join(" "),
+                    escape(&m.id)
+                );
+            }
+            Some(stretches) => {
+                // A part of a body: filled whole, outlined where it is not glued.
+                let _ = writeln!(
+                    s,
+                    r#"<polygon fill="{fill}" stroke="{fill}" points="{}"><title>{}</title></polygon>"#,
+                    pts.join(" "),
+                    escape(&m.id)
+                );
+                let mut path = String::new();
+                for &(k, s0, s1) in stretches {
+                    let (a, b) = (v[k], v[(k + 1) % v.len()]);
+                    let (p, q) = (a.lerp(b, s0), a.lerp(b, s1));
+                    let _ = write!(path, "M{},{}L{},{}", p.x, -p.y, q.x, -q.y);
+                }
+                let _ = writeln!(s, r#"<path fill="none" d="{path}"/>"#);
+            }
+        }
     }
     s.push_str("</g>\n</svg>\n");
     s
@@ -253,4 +329,50 @@ pub fn escape(s: &str) -> String {
         .replace('<', "&lt;")
         .replace('>', "&gt;")
         .replace('"', "&quot;")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An L-shaped region is one body of two glued parts: what is drawn of their outlines
+    /// is the L's perimeter (8 m), not the parts' (which add their seam twice).
+    #[test]
+    fn a_body_is_drawn_without_its_seams() {
+        let text = r#"
+name = "l"
+[analysis]
+duration = 0.1
+time_step = 0.01
+max_displacement = 0.001
+normal_penalty = 1e9
+[materials.rock]
+density = 2600.0
+young = 1e9
+poisson = 0.2
+[[regions]]
+id = "l"
+material = "rock"
+vertices = [[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 1.0], [1.0, 2.0], [0.0, 2.0]]
+"#;
+        let (_, model) =
+            dda_core::Scene::parse(text, dda_core::Format::Toml, "l.toml").expect("a valid scene");
+        assert_eq!(model.blocks.len(), 2);
+        let drawn = drawn_edges(&model);
+        let mut length = 0.0;
+        for (b, stretches) in model.blocks.iter().zip(&drawn) {
+            for &(k, s0, s1) in stretches.as_ref().expect("a part of a body") {
+                let (p, q) = b.polygon.edge(k);
+                length += (s1 - s0) * p.distance(q);
+            }
+        }
+        assert!((length - 8.0).abs() < 1e-12, "drawn {length} m");
+        let parts: f64 = model
+            .blocks
+            .iter()
+            .map(|b| b.polygon.edges().map(|(p, q)| p.distance(q)).sum::<f64>())
+            .sum();
+        // The parts' own outlines are longer by the seam, twice: a diagonal of the L.
+        assert!(parts - 8.0 > 2.0, "{parts}");
+    }
 }
