@@ -1243,3 +1243,38 @@ fn an_excavation_is_reported_and_its_run_renders_and_repeats() {
     };
     assert_eq!(cut(&out), cut(&again));
 }
+
+/// summary.json gives each block's stress: the test scene's 1 m block at rest on the
+/// base (a static analysis) carries its weight, so its mean vertical stress is
+/// -rho g h / 2 = -2600 x 9.81 x 1 / 2 = -12,753 Pa (the stress falls linearly from the
+/// base to the free top; a DDA block's stress is its mean), within 1e-3.
+#[test]
+fn summary_gives_each_blocks_stress() {
+    let dir = scratch("stress");
+    let file = variant(
+        &dir,
+        "rest.toml",
+        &[
+            ("mode = \"dynamic\"", "mode = \"static\""),
+            ("velocity = [1.0, 0.0]", ""),
+        ],
+    );
+    let out = dir.join("out");
+    let o = run_file(&file, &out, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = summary(&out);
+    let slider = s["blocks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|b| b["id"] == "slider")
+        .unwrap();
+    let syy = slider["stress"][1].as_f64().unwrap();
+    let expected = -2600.0 * 9.81 * 1.0 / 2.0;
+    assert!(
+        (syy - expected).abs() < 1e-3 * expected.abs(),
+        "syy {syy} Pa, expected {expected}"
+    );
+    let base = &s["blocks"][0]["stress"];
+    assert_eq!(base, &serde_json::json!([0.0, 0.0, 0.0]), "the fixed base");
+}

@@ -193,7 +193,8 @@ fn mutate_text(text: &[u8], rng: &mut Rng) -> Vec<u8> {
     t
 }
 
-/// The scenes the mutants start from: the small built-ins and the test scene.
+/// The scenes the mutants start from: the small built-ins, the test scene, and scenes
+/// with regions and excavations, unexpanded.
 fn bases() -> Vec<Value> {
     let mut scenes: Vec<dda::core::Scene> = dda::bench::BUILTINS
         .iter()
@@ -205,6 +206,17 @@ fn bases() -> Vec<Value> {
         "/tests/scenes/sliding-block.toml"
     );
     scenes.push(dda::core::Scene::load(Path::new(test_scene)).unwrap().0);
+    // Rock masses: regions, statistical and non-persistent joint sets, non-convex
+    // outlines, excavations.
+    for file in [
+        "/tests/scenes/excavation.toml",
+        "/examples/toppling.toml",
+        "/examples/tunnel.toml",
+    ] {
+        let path = format!("{}{file}", env!("CARGO_MANIFEST_DIR"));
+        let text = std::fs::read_to_string(&path).unwrap();
+        scenes.push(toml::from_str(&text).unwrap());
+    }
     scenes
         .iter()
         .map(|s| serde_json::to_value(s).unwrap())

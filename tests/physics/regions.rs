@@ -164,6 +164,7 @@ vertices = [[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [4.0, 2.0], [4.0, 3.0], [0.0, 3.
     let mut loose = explicit.clone();
     for b in &mut loose.blocks {
         b.body = None;
+        b.glued_edges = None;
     }
     let fell = tip_drop(&loose);
     assert!(
@@ -358,4 +359,58 @@ fn rock_above_an_excavation_falls_after_it_and_not_before() {
         fell > 0.5 * free_fall,
         "fell {fell} m, a free fall {free_fall} m"
     );
+}
+
+/// `tests/scenes/rock-mass.toml`: a non-convex slope cut by a bedding set and a
+/// non-persistent, statistical cross set, excavated at 0.1 s. With the cover detector
+/// and TB-CD-1 it runs past the excavation under the physics guard (no energy created
+/// beyond 1%, no penetration beyond d_tol): the glue of the non-convex pieces starts
+/// unloaded. (Before the glue took only seam contacts, a vertex 3 mm across a sliver
+/// part was locked to a face it did not touch, and the first step created 2 times the
+/// reference energy.) TB-CD-2 is left out: its bands fail on this mass's edges shorter
+/// than d_tol, glued or not (docs/method.md, section 10).
+#[test]
+fn a_jointed_mass_with_glued_pieces_runs_under_the_guard() {
+    let text = include_str!("../scenes/rock-mass.toml");
+    for detector in ["cover", "type-1"] {
+        let text = text.replace(
+            "normal_penalty = 1e10",
+            &format!("normal_penalty = 1e10\ndetector = \"{detector}\""),
+        );
+        let (_, model) = Scene::parse(&text, Format::Toml, "rock-mass.toml").unwrap();
+        assert!(model.blocks.iter().any(|b| b.body.is_some()));
+        let options = RunOptions {
+            stop_on_violation: true,
+            ..RunOptions::default()
+        };
+        let mut sim = Simulation::new(model, options);
+        sim.run(|_, _| {})
+            .unwrap_or_else(|e| panic!("{detector}: {e}"));
+        assert!((0..sim.blocks().len()).any(|i| sim.is_removed(i)));
+    }
+}
+
+/// Every scene of `examples/` runs to its end as written, with the physics guard on: no
+/// energy created beyond 1% of its reference, no penetration beyond d_tol.
+#[test]
+fn every_example_runs_to_its_end_under_the_guard() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 3, "{files:?}");
+    for file in files {
+        let (_, model) = Scene::load(&file).unwrap();
+        let options = RunOptions {
+            stop_on_violation: true,
+            ..RunOptions::default()
+        };
+        let mut sim = Simulation::new(model, options);
+        sim.run(|_, _| {})
+            .unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+        assert!(sim.finished());
+    }
 }

@@ -84,13 +84,12 @@ pub fn decide(
     let Trial { d, band } = trial;
     let mut n = *c;
     if joint.glued {
-        // Parts of one body: locked and bonded, whatever the trial says.
-        if c.state != ContactState::Locked {
-            n.locked_r = c.r.clamp(0.0, 1.0);
+        // Parts of one body: a seam contact (bonded at detection) stays locked whatever
+        // the trial says; any other contact between them stays open.
+        if c.bonded {
+            n.state = ContactState::Locked;
+            n.normal_force = -pn * d;
         }
-        n.state = ContactState::Locked;
-        n.bonded = true;
-        n.normal_force = -pn * d;
         return n;
     }
     match c.state {

@@ -15,6 +15,12 @@ use dda_contact::ContactState;
 /// 0.44% against 0.87%.
 pub(crate) const NEIGHBOUR_SKIN: f64 = 2.0;
 
+/// How far from the line of an edge, in d_tol, a vertex of another part of the same
+/// body may be for their contact to be a seam of the glue: parts cut from one outline
+/// share their seams to rounding (1e-14 m and less), and no other pair of their
+/// features comes this close without touching.
+pub(crate) const GLUE_SEAM: f64 = 1e-3;
+
 impl Simulation {
     /// Step-start detection with states inherited from the previous step, then the
     /// engine's normalisation: closed contacts of frictionless joints slide (no shear
@@ -49,13 +55,22 @@ impl Simulation {
         let glue = self.model.joints_by_edge;
         for k in 0..self.state.contacts.contacts.len() {
             if glue && self.state.contacts.contacts[k].active && self.joint(k).glued {
-                // Parts of one body: every active contact locked and bonded.
+                // Parts of one body: a contact on the seam (its vertex on the edge's line,
+                // within GLUE_SEAM of d_tol) is locked and bonded where it is, unloaded,
+                // for good; any other contact between them (a vertex across a sliver
+                // part) is no contact at all.
+                let seam = GLUE_SEAM * self.detection.d_tol;
                 let c = &mut self.state.contacts.contacts[k];
-                if c.state != ContactState::Locked {
-                    c.locked_r = c.r.clamp(0.0, 1.0);
+                if c.bonded || c.d_n.abs() <= seam {
+                    if !c.bonded {
+                        c.locked_r = c.r;
+                    }
+                    c.state = ContactState::Locked;
+                    c.bonded = true;
+                } else {
+                    c.state = ContactState::Open;
+                    c.active = false;
                 }
-                c.state = ContactState::Locked;
-                c.bonded = true;
                 continue;
             }
             // Open contacts are left as they are: only closed ones need their joint.

@@ -196,9 +196,31 @@ impl Scene {
                     ));
                 }
                 block.body = Some(index);
+                if let Some(edges) = &b.glued_edges {
+                    block.glued = vec![false; block.polygon.len()];
+                    for (e, &k) in edges.iter().enumerate() {
+                        let slot = block.glued.get_mut(k).ok_or_else(|| {
+                            invalid(
+                                format!("{key}.glued_edges[{e}]"),
+                                format!(
+                                    "edge {k} does not exist: the block has {} edges (0 to {})",
+                                    b.vertices.len(),
+                                    b.vertices.len().saturating_sub(1)
+                                ),
+                            )
+                        })?;
+                        *slot = true;
+                    }
+                }
+            } else if b.glued_edges.is_some() {
+                return Err(invalid(
+                    format!("{key}.glued_edges"),
+                    "only a part of a body (`body = \"NAME\"`) has glued edges",
+                ));
             }
             blocks.push(block);
         }
+        glue_seams(&mut blocks, self);
         if blocks.iter().all(|b| b.fixed || b.removed_at.is_some())
             && let Some(i) = blocks.iter().position(|b| !b.fixed)
         {
@@ -245,6 +267,37 @@ impl Scene {
             blocks,
             warnings,
         })
+    }
+}
+
+/// The seams of the parts of bodies whose scene gives no `glued_edges`: every edge that
+/// runs along an edge of another part of its body (anti-parallel, on one line within
+/// 1e-9 of the part's size, overlapping by more than that).
+fn glue_seams(blocks: &mut [ModelBlock], scene: &Scene) {
+    let n = blocks.len();
+    for i in 0..n {
+        if blocks[i].body.is_none() || scene.blocks[i].glued_edges.is_some() {
+            continue;
+        }
+        let p = &blocks[i].polygon;
+        let eps = 1e-9 * p.diameter();
+        let glued: Vec<bool> = (0..p.len())
+            .map(|k| {
+                let (a, c) = p.edge(k);
+                let d = (c - a).normalize();
+                let len = (c - a).length();
+                (0..n).any(|j| {
+                    j != i
+                        && blocks[j].body == blocks[i].body
+                        && blocks[j].polygon.edges().any(|(q0, q1)| {
+                            let on = |q: DVec2| d.perp_dot(q - a).abs() <= eps;
+                            let (lo, hi) = (d.dot(q1 - a).max(0.0), d.dot(q0 - a).min(len));
+                            on(q0) && on(q1) && d.dot(q1 - q0) < 0.0 && hi - lo > eps
+                        })
+                })
+            })
+            .collect();
+        blocks[i].glued = glued;
     }
 }
 
@@ -597,6 +650,9 @@ pub struct ModelBlock {
     pub edge_joints: Vec<Option<u16>>,
     /// The body this block is a part of (glued to the other parts), by index.
     pub body: Option<u32>,
+    /// For a part of a body, whether each edge is glued to the other parts (a seam of
+    /// intact rock); empty otherwise.
+    pub glued: Vec<bool>,
     /// When the block is removed (excavated), s.
     pub removed_at: Option<f64>,
 }
@@ -641,6 +697,7 @@ impl BlockSpec {
             fixed_points,
             edge_joints: Vec::new(),
             body: None,
+            glued: Vec::new(),
             removed_at: match self.removed_at {
                 Some(t) => Some(within(&format!("{key}.removed_at"), t, &limits::REMOVAL)?),
                 None => None,
@@ -679,11 +736,11 @@ impl Model {
     }
 
     /// The joint of a contact of a vertex of block `a` against edge `edge` of block `b`:
-    /// the glue between parts of one body; else the joint the edge names; else that of
-    /// the two materials.
+    /// the glue, if the two are parts of one body and the edge is one of its seams; else
+    /// the joint the edge names; else that of the two materials.
     pub fn joint_of_contact(&self, a: usize, b: usize, edge: usize) -> &JointProps {
         let (ba, bb) = (&self.blocks[a], &self.blocks[b]);
-        if ba.body.is_some() && ba.body == bb.body {
+        if ba.body.is_some() && ba.body == bb.body && bb.glued.get(edge) == Some(&true) {
             return &JointProps::GLUED;
         }
         match bb.edge_joints.get(edge) {

@@ -338,6 +338,9 @@ pub fn expand(scene: &Scene) -> Result<(Scene, Dropped), Invalid> {
                         Vec::new()
                     },
                     body: glued.then(|| id.clone()),
+                    // Seams: intact rock between parts, never a trace (the faces of a
+                    // joint that ends inside the piece are a joint, not a seam).
+                    glued_edges: glued.then(|| seams(&piece.parts, m, |k| sets[k].is_none())),
                     ..Default::default()
                 });
             }
@@ -346,6 +349,21 @@ pub fn expand(scene: &Scene) -> Result<(Scene, Dropped), Invalid> {
     let excavations = std::mem::take(&mut out.excavations);
     for (x, e) in excavations.iter().enumerate() {
         excavate(&mut out, x, e)?;
+    }
+    let free = |b: &&BlockSpec| !b.fixed;
+    if !excavations.is_empty()
+        && out.blocks.iter().any(|b| free(&b))
+        && out
+            .blocks
+            .iter()
+            .filter(free)
+            .all(|b| b.removed_at.is_some())
+    {
+        return Err(invalid(
+            format!("excavations[{}].vertices", excavations.len() - 1),
+            "the excavations remove every free block during the run, which leaves nothing \
+             to move: excavate less, or add the rock around the excavation",
+        ));
     }
     Ok((out, dropped))
 }
@@ -433,6 +451,12 @@ fn excavate(scene: &mut Scene, x: usize, e: &ExcavationSpec) -> Result<(), Inval
         }
         let body = b.body.clone().unwrap_or_else(|| b.id.clone());
         let eps = 1e-9 * poly.diameter();
+        let all: Vec<ConvexPolygon> = cut.pieces.iter().flat_map(|p| p.parts.clone()).collect();
+        // The block's own seams, if it was a part of a body already.
+        let was_glued = |k: usize| match &b.glued_edges {
+            Some(g) => g.contains(&k),
+            None => b.body.is_some(),
+        };
         let mut m = 0;
         for piece in &cut.pieces {
             let gone = inside(piece);
@@ -469,8 +493,22 @@ fn excavate(scene: &mut Scene, x: usize, e: &ExcavationSpec) -> Result<(), Inval
                         })
                         .collect()
                 };
+                // Glued along the new cuts (the rock is intact until the excavation),
+                // and where the block was glued before.
+                let mut glued = seams(&all, m - 1, |_| true);
+                for k in 0..pv.len() {
+                    if original_edge(&poly, pv[k], pv[(k + 1) % pv.len()], eps)
+                        .is_some_and(was_glued)
+                        && !glued.contains(&k)
+                    {
+                        glued.push(k);
+                    }
+                }
+                glued.sort_unstable();
                 scene.blocks.push(BlockSpec {
                     id: format!("{}.{m}", b.id),
+                    // A part of a body whose seams were left to be found keeps them so.
+                    glued_edges: (b.body.is_none() || b.glued_edges.is_some()).then_some(glued),
                     vertices: pv.iter().map(|p| [p.x, p.y]).collect(),
                     loads,
                     fixed_points,
@@ -503,6 +541,30 @@ fn claimed(blocks: &[BlockSpec], id: &str, at: [f64; 2]) -> bool {
         .rev()
         .take_while(|b| b.id.starts_with(&prefix))
         .any(|b| b.loads.iter().any(|l| l.at == at))
+}
+
+/// The edges of `parts[i]` that run along another of the `parts` (anti-parallel, on one
+/// line within 1e-9 of the part's size, overlapping by more than that) and that `may`
+/// be seams.
+fn seams(parts: &[ConvexPolygon], i: usize, may: impl Fn(usize) -> bool) -> Vec<usize> {
+    let p = &parts[i];
+    let eps = 1e-9 * p.diameter();
+    (0..p.len())
+        .filter(|&k| {
+            let (a, c) = p.edge(k);
+            let len = (c - a).length();
+            let d = (c - a) / len;
+            may(k)
+                && parts.iter().enumerate().any(|(j, q)| {
+                    j != i
+                        && q.edges().any(|(q0, q1)| {
+                            let on = |x: DVec2| d.perp_dot(x - a).abs() <= eps;
+                            let (lo, hi) = (d.dot(q1 - a).max(0.0), d.dot(q0 - a).min(len));
+                            on(q0) && on(q1) && d.dot(q1 - q0) < 0.0 && hi - lo > eps
+                        })
+                })
+        })
+        .collect()
 }
 
 /// The edge of `poly` that the segment a-b lies along, if any.

@@ -293,9 +293,14 @@ pub struct BlockSpec {
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub edge_joints: Vec<String>,
     /// The non-convex block this one is a convex part of: blocks of one body are glued
-    /// where they touch (bonded contacts that never open or slide).
+    /// along their `glued_edges` (bonded contacts that never open or slide).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub body: Option<String>,
+    /// The edges (by index, edge k from vertex k to k + 1) along which this part of a
+    /// body is glued to the others; absent: every edge that runs along another part of
+    /// its body at the start.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub glued_edges: Option<Vec<usize>>,
     /// When the block is removed (excavated), s; absent, never.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub removed_at: Option<f64>,

@@ -28,6 +28,9 @@ pub struct BlockSummary {
     pub velocity: [f64; 2],
     /// Accumulated rotation, rad.
     pub rotation: f64,
+    /// Stress (sxx, syy, sxy), Pa, tension positive (zero for rigid blocks).
+    #[serde(default)]
+    pub stress: [f64; 3],
 }
 
 /// summary.json.
@@ -165,6 +168,7 @@ impl Summary {
                         centroid: [c.x, c.y],
                         velocity: [b.velocity[0], b.velocity[1]],
                         rotation: b.rotation,
+                        stress: b.stress,
                     }
                 })
                 .collect(),

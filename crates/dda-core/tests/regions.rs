@@ -274,7 +274,7 @@ fn regions_written_to_six_decimals_may_share_an_edge() {
 }
 
 /// Bad excavations are refused with their key and line: a time after the run, an outline
-/// that removes nothing, one that crosses itself.
+/// that removes nothing, one that crosses itself, one that removes all there is to move.
 #[test]
 fn bad_excavations_are_named_with_key_and_line() {
     let cases = [
@@ -292,6 +292,11 @@ fn bad_excavations_are_named_with_key_and_line() {
             "at = 0.1\nvertices = [[10.0, 1.0], [12.0, 3.0], [12.0, 1.0], [10.0, 3.0]]",
             "excavations[0].vertices[0]",
             "crosses",
+        ),
+        (
+            "at = 0.1\nvertices = [[-1.0, 0.0], [41.0, 0.0], [41.0, 13.0], [-1.0, 13.0]]",
+            "excavations[0].vertices",
+            "every free block",
         ),
     ];
     for (body, key, words) in cases {

@@ -140,9 +140,9 @@ impl Frame {
 
 /// The stretches of each block's outline to draw, as `(edge, s0, s1)`: edge `edge` from
 /// ratio `s0` to `s1` along it; `None` for a block drawn whole. A block that is a part of
-/// a non-convex body (`body`) is drawn without the stretches where it lies against
-/// another part of its body at the start (the glue is not a joint), so the body shows as
-/// one block. Ratios, so that they follow the blocks as they move and deform.
+/// a non-convex body (`body`) is drawn without the stretches of its glued edges where it
+/// lies against another part of its body at the start (the glue is not a joint), so the
+/// body shows as one block, its joints (a trace ending inside it) drawn. Ratios, so that they follow the blocks as they move and deform.
 pub fn drawn_edges(model: &Model) -> Vec<Option<Vec<(usize, f64, f64)>>> {
     model
         .blocks
@@ -161,6 +161,10 @@ pub fn drawn_edges(model: &Model) -> Vec<Option<Vec<(usize, f64, f64)>>> {
                 .collect();
             let mut out = Vec::new();
             for k in 0..p.len() {
+                if b.glued.get(k) != Some(&true) {
+                    out.push((k, 0.0, 1.0));
+                    continue;
+                }
                 let (a, c) = p.edge(k);
                 let len = a.distance(c);
                 let d = (c - a) / len;
