@@ -24,9 +24,11 @@ pub const MARKER: &str = ".dda-run";
 pub const LOCK: &str = ".dda-lock";
 /// The files a run writes at the top of its folder (besides [`MARKER`], [`LOCK`] and
 /// the `frames` folder).
-const OWN_FILES: [&str; 6] = [
+const OWN_FILES: [&str; 8] = [
     "summary.json",
     "history.csv",
+    "measurements.csv",
+    "bolts.csv",
     "frames.jsonl",
     "report.html",
     "scene.json",

@@ -18,7 +18,10 @@ use super::render::{render_outputs, write_new};
 use super::signals::{self, Signals};
 use super::{Failure, Resolved, bad, build_scene, default_out, resolve_scene, validate};
 use clap::Args;
-use dda::report::{Frame, HISTORY_HEADER, frame_resolution, frame_view, history_row};
+use dda::report::{
+    BOLTS_HEADER, Frame, HISTORY_HEADER, MEASUREMENTS_HEADER, bolt_rows, frame_resolution,
+    frame_view, history_row, measurement_rows,
+};
 use dda_core::{Checkpoint, RunOptions, Scene, Simulation, Summary};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
@@ -47,6 +50,12 @@ struct OutputMarks {
     checkpoint_every: u64,
     /// Whether the run goes on through violations of physics (`--keep-going`).
     keep_going: bool,
+    /// Bytes of measurements.csv written (a scene with measured points).
+    #[serde(default)]
+    measurements_bytes: u64,
+    /// Bytes of bolts.csv written (a scene with bolts).
+    #[serde(default)]
+    bolts_bytes: u64,
 }
 
 /// Options of `run` and `resume` that bound or relax a run.
@@ -159,9 +168,19 @@ struct Job {
     marks: OutputMarks,
     history: BufWriter<File>,
     frames: BufWriter<File>,
+    /// measurements.csv and bolts.csv, when the scene has measured points or bolts.
+    tables: Tables,
     animation_frames: u64,
     resolution: f64,
     quiet: bool,
+}
+
+/// The per-step tables a scene may call for: measurements.csv (measured points) and
+/// bolts.csv (bolts).
+#[derive(Default)]
+struct Tables {
+    measurements: Option<BufWriter<File>>,
+    bolts: Option<BufWriter<File>>,
 }
 
 /// Runs `dda run`.
@@ -223,6 +242,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode, Failure> {
     job.max_steps = args.limits.max_steps;
     job.signals = signals;
     job.finish(|job| {
+        job.open_tables(true)?;
         job.write_history(HISTORY_HEADER)?;
         job.write_frame(job.sim.model().params.frames > 0)?;
         job.announce("scene");
@@ -282,6 +302,7 @@ pub fn resume(args: ResumeArgs) -> Result<ExitCode, Failure> {
     job.max_steps = args.limits.max_steps;
     job.signals = signals;
     job.finish(|job| {
+        job.open_tables(false)?;
         job.announce("resuming");
         job.drive()
     })
@@ -338,6 +359,7 @@ impl Job {
             },
             history,
             frames,
+            tables: Tables::default(),
             animation_frames,
             resolution,
             quiet,
@@ -397,6 +419,78 @@ impl Job {
         Ok(())
     }
 
+    /// Opens measurements.csv and bolts.csv where the scene calls for them: new, with
+    /// their headers (`fresh`), or cut back to the checkpoint's marks (a resume).
+    fn open_tables(&mut self, fresh: bool) -> Result<(), Failure> {
+        let model = self.sim.model();
+        let wanted = [
+            (
+                !model.measures.is_empty(),
+                "measurements.csv",
+                MEASUREMENTS_HEADER,
+            ),
+            (!model.bolts.is_empty(), "bolts.csv", BOLTS_HEADER),
+        ];
+        for (k, (want, name, header)) in wanted.into_iter().enumerate() {
+            if !want {
+                continue;
+            }
+            let path = self.work.join(name);
+            let file = if fresh {
+                let mut w =
+                    BufWriter::new(File::create(&path).map_err(|e| output_error(e, &path))?);
+                writeln!(w, "{header}").map_err(|e| output_error(e, &path))?;
+                *self.table_bytes(k) = header.len() as u64 + 1;
+                w
+            } else {
+                reopen(&path, *self.table_bytes(k))?
+            };
+            if k == 0 {
+                self.tables.measurements = Some(file);
+            } else {
+                self.tables.bolts = Some(file);
+            }
+        }
+        Ok(())
+    }
+
+    /// The bytes written of table `k` (0: measurements.csv, 1: bolts.csv).
+    fn table_bytes(&mut self, k: usize) -> &mut u64 {
+        if k == 0 {
+            &mut self.marks.measurements_bytes
+        } else {
+            &mut self.marks.bolts_bytes
+        }
+    }
+
+    /// Appends this step's rows to measurements.csv and bolts.csv.
+    fn write_tables(&mut self) -> Result<(), Failure> {
+        let rows = [measurement_rows(&self.sim), bolt_rows(&self.sim)];
+        for (k, rows) in rows.into_iter().enumerate() {
+            let name = if k == 0 {
+                "measurements.csv"
+            } else {
+                "bolts.csv"
+            };
+            let path = self.work.join(name);
+            let file = if k == 0 {
+                self.tables.measurements.as_mut()
+            } else {
+                self.tables.bolts.as_mut()
+            };
+            let Some(w) = file else {
+                continue;
+            };
+            let mut bytes = 0;
+            for r in rows {
+                writeln!(w, "{r}").map_err(|e| output_error(e, &path))?;
+                bytes += r.len() as u64 + 1;
+            }
+            *self.table_bytes(k) += bytes;
+        }
+        Ok(())
+    }
+
     /// Appends the current state to frames.jsonl.
     fn write_frame(&mut self, svg: bool) -> Result<(), Failure> {
         let path = self.work.join("frames.jsonl");
@@ -432,10 +526,16 @@ impl Job {
 
     /// Flushes history.csv and frames.jsonl, and with `sync` forces them to disk.
     fn flush(&mut self, sync: bool) -> Result<(), Failure> {
-        for (w, name) in [
+        let tables = [
+            (self.tables.measurements.as_mut(), "measurements.csv"),
+            (self.tables.bolts.as_mut(), "bolts.csv"),
+        ];
+        let mut files: Vec<(&mut BufWriter<File>, &str)> = vec![
             (&mut self.history, "history.csv"),
             (&mut self.frames, "frames.jsonl"),
-        ] {
+        ];
+        files.extend(tables.into_iter().filter_map(|(w, n)| w.map(|w| (w, n))));
+        for (w, name) in files {
             let path = self.work.join(name);
             w.flush().map_err(|e| output_error(e, &path))?;
             if sync {
@@ -494,6 +594,7 @@ impl Job {
             match self.sim.step() {
                 Ok(rec) => {
                     self.write_history(&history_row(&rec))?;
+                    self.write_tables()?;
                     self.sample_frames()?;
                     let every = self.marks.checkpoint_every;
                     if every > 0 && rec.step.is_multiple_of(every) && !self.sim.finished() {

@@ -1242,6 +1242,19 @@ fn an_excavation_is_reported_and_its_run_renders_and_repeats() {
             .collect()
     };
     assert_eq!(cut(&out), cut(&again));
+    // The bolt and the measured point: a row each per step.
+    let steps = s["steps"].as_u64().unwrap() as usize;
+    let table = |p: &Path, name: &str| std::fs::read_to_string(p.join(name)).unwrap();
+    assert_eq!(table(&out, "measurements.csv").lines().count(), steps + 1);
+    assert_eq!(table(&out, "bolts.csv").lines().count(), steps + 1);
+    assert_eq!(s["bolts"][0]["from_block"], "wall.4");
+    // The wall settles under gravity onto the contact springs beneath it, shortening
+    // the bolt from its pretension of 1000 N; bolts.csv's last row says the same.
+    let tension = s["bolts"][0]["tension"].as_f64().unwrap();
+    assert!(tension < 1000.0 - 1.0, "{tension}");
+    let last = table(&out, "bolts.csv").lines().last().unwrap().to_string();
+    let field: f64 = last.split(',').nth(4).unwrap().parse().unwrap();
+    assert_eq!(field, tension, "{last}");
 }
 
 /// summary.json gives each block's stress: the test scene's 1 m block at rest on the

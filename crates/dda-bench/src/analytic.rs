@@ -57,6 +57,8 @@ fn scene(name: &str, analysis: Analysis, friction_deg: f64, blocks: Vec<BlockSpe
         joint_sets: BTreeMap::new(),
         regions: Vec::new(),
         excavations: Vec::new(),
+        bolts: Vec::new(),
+        measure: Vec::new(),
     }
 }
 

@@ -85,6 +85,8 @@ pub fn column_scene(name: &str, blocks: &[ConvexPolygon], analysis: Analysis) ->
         joint_sets: BTreeMap::new(),
         regions: Vec::new(),
         excavations: Vec::new(),
+        bolts: Vec::new(),
+        measure: Vec::new(),
     }
 }
 

@@ -210,6 +210,8 @@ pub fn collision_scene(
         joint_sets: BTreeMap::new(),
         regions: Vec::new(),
         excavations: Vec::new(),
+        bolts: Vec::new(),
+        measure: Vec::new(),
     }
 }
 

@@ -168,6 +168,8 @@ impl Masonry {
             joint_sets: BTreeMap::new(),
             regions: Vec::new(),
             excavations: Vec::new(),
+            bolts: Vec::new(),
+            measure: Vec::new(),
         }
     }
 }

@@ -69,6 +69,12 @@ impl Simulation {
     /// block in free-block order. With `parallel` they are computed on the thread pool:
     /// each block's terms depend on that block alone, so the result is the same.
     pub(crate) fn base_terms(&mut self, dt: f64) {
+        self.block_base_terms(dt);
+        self.bolt_terms();
+    }
+
+    /// The per-block part of [`Simulation::base_terms`].
+    fn block_base_terms(&mut self, dt: f64) {
         let n = self.free_blocks.len();
         self.scratch.base_k.resize(n, [[0.0; 6]; 6]);
         self.scratch.base_f.resize(n, [0.0; 6]);
@@ -250,6 +256,7 @@ impl Simulation {
                 &row,
             );
         }
+        self.bolt_couplings();
         self.assemble_rhs();
         watch.lap(rec, Phase::Assembly);
         self.scratch

@@ -25,8 +25,8 @@ pub const CHECKPOINT_MAGIC: [u8; 8] = *b"DDA-CKPT";
 /// The format version written; files of another version are refused. Version 2: the
 /// contacts' pairs carry the cover detector's deep flag. Version 3: the physics guard's
 /// energy balance and recorded violations; the engine's state as one record and the
-/// running program's record apart from it.
-pub const CHECKPOINT_VERSION: u32 = 3;
+/// running program's record apart from it. Version 4: what has come of each bolt.
+pub const CHECKPOINT_VERSION: u32 = 4;
 
 /// Length of the header before the payload.
 const HEADER_LEN: usize = 24;

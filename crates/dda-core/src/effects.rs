@@ -35,6 +35,8 @@ pub struct Effects {
     pub tension: bool,
     /// Non-convex blocks carried as convex parts glued together.
     pub glued_parts: bool,
+    /// Rock bolts.
+    pub bolts: bool,
 }
 
 impl Effects {
@@ -82,6 +84,7 @@ impl Effects {
             cohesion,
             tension,
             glued_parts: blocks.iter().any(|b| b.body.is_some()),
+            bolts: !model.bolts.is_empty(),
         }
     }
 
@@ -112,6 +115,7 @@ impl Effects {
         on(self.cohesion, "cohesion");
         on(self.tension, "tension");
         on(self.glued_parts, "glued-parts");
+        on(self.bolts, "bolts");
         v
     }
 }

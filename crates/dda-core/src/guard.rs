@@ -151,6 +151,7 @@ impl Simulation {
             }
             gains.push((ke - kinetic(mass, &b.velocity), i));
         }
+        work += self.bolt_work();
         let supplied = self.state.energy.supplied + work;
         let reference = self.state.energy.supplied_max.max(supplied) + self.energy_floor;
         let excess = mechanical - supplied;

@@ -10,6 +10,7 @@
 #![allow(clippy::needless_range_loop)]
 
 mod assembly;
+mod bolts;
 pub mod checkpoint;
 mod contact_law;
 mod detection;
@@ -33,6 +34,7 @@ pub mod time_step;
 pub mod timing;
 mod update;
 
+pub use self::bolts::BoltState;
 pub use self::checkpoint::{Checkpoint, CheckpointError};
 pub use self::diagnosis::{ContactNote, Diagnosis, SimError};
 pub use self::effects::Effects;
@@ -42,5 +44,5 @@ pub use self::scene::{Format, Invalid, Model, Scene, SceneError};
 pub use self::simulation::{RunOptions, Simulation};
 pub use self::solver::{BlockSystem, RankOne, SolveError, SolverCounters};
 pub use self::state::{BlockState, RunState, Snapshot, StepRecord, Totals};
-pub use self::summary::{BlockSummary, Seconds, Summary};
+pub use self::summary::{BlockSummary, BoltSummary, Broken, Removed, Seconds, Summary};
 pub use self::timing::Phase;

@@ -138,6 +138,12 @@ pub const REMOVAL: Range = Range {
     max: 1e7,
     unit: "s",
 };
+/// `bolts[].pretension` and `bolts[].strength`, N.
+pub const BOLT_FORCE: Range = Range {
+    min: 0.0,
+    max: 1e13,
+    unit: "N",
+};
 /// Most blocks the `[[regions]]` of a scene may be cut into, estimated before cutting
 /// from the joints crossing each region (a spacing typed in mm for m would otherwise
 /// cut for hours and exhaust memory).

@@ -238,9 +238,6 @@ impl Scene {
             ));
         }
         check_start_overlaps(&blocks)?;
-        if params.mode == Mode::Static {
-            check_static_support(&blocks, params.d_tol)?;
-        }
         let mut warnings = unit_slips(self);
         warnings.append(&mut unused);
         if params.d_tol < 2.0 * params.d_max {
@@ -257,7 +254,96 @@ impl Scene {
         let joints_by_edge = blocks
             .iter()
             .any(|b| b.body.is_some() || !b.edge_joints.is_empty());
+        let measures = self
+            .measure
+            .iter()
+            .enumerate()
+            .map(|(i, m)| {
+                let key = format!("measure[{i}]");
+                if m.id.trim().is_empty() {
+                    return Err(invalid(format!("{key}.id"), "must not be empty"));
+                }
+                let at = point_in(&format!("{key}.at"), m.at, &blocks)?;
+                Ok(ModelMeasure {
+                    id: m.id.clone(),
+                    block: at.0,
+                    at: at.1,
+                })
+            })
+            .collect::<Result<Vec<_>, Invalid>>()?;
+        let mut ids = BTreeMap::new();
+        for (i, m) in measures.iter().enumerate() {
+            if let Some(j) = ids.insert(m.id.as_str(), i) {
+                return Err(invalid(
+                    format!("measure[{i}].id"),
+                    format!("duplicate id `{}` (also measure[{j}])", m.id),
+                ));
+            }
+        }
+        let mut bolts = Vec::with_capacity(self.bolts.len());
+        for (i, b) in self.bolts.iter().enumerate() {
+            let key = format!("bolts[{i}]");
+            let from = point_in(&format!("{key}.from"), b.from, &blocks)?;
+            let to = point_in(&format!("{key}.to"), b.to, &blocks)?;
+            if from.0 == to.0 {
+                return Err(invalid(
+                    format!("{key}.to"),
+                    format!(
+                        "both ends are in block `{}`: a bolt joins two blocks",
+                        blocks[from.0].id
+                    ),
+                ));
+            }
+            if blocks[from.0].fixed && blocks[to.0].fixed {
+                return Err(invalid(
+                    format!("{key}.to"),
+                    format!(
+                        "both ends are in fixed blocks (`{}`, `{}`): the bolt holds nothing",
+                        blocks[from.0].id, blocks[to.0].id
+                    ),
+                ));
+            }
+            if from.1.distance(to.1) <= 1e-9 * blocks[from.0].polygon.diameter() {
+                return Err(invalid(
+                    format!("{key}.to"),
+                    "the two ends coincide: a bolt needs a length",
+                ));
+            }
+            let stiffness = within(&format!("{key}.stiffness"), b.stiffness, &limits::PENALTY)?;
+            let pretension = match b.pretension {
+                Some(t) => within(&format!("{key}.pretension"), t, &limits::BOLT_FORCE)?,
+                None => 0.0,
+            };
+            let strength = match b.strength {
+                Some(t) if t > 0.0 => {
+                    Some(within(&format!("{key}.strength"), t, &limits::BOLT_FORCE)?)
+                }
+                Some(t) => {
+                    return Err(invalid(
+                        format!("{key}.strength"),
+                        format!("must be a positive force in N, got {t}"),
+                    ));
+                }
+                None => None,
+            };
+            bolts.push(ModelBolt {
+                from_block: from.0,
+                from: from.1,
+                to_block: to.0,
+                to: to.1,
+                stiffness,
+                pretension,
+                strength,
+            });
+        }
+        if params.mode == Mode::Static {
+            let tied: Vec<(usize, usize)> =
+                bolts.iter().map(|b| (b.from_block, b.to_block)).collect();
+            check_static_support(&blocks, params.d_tol, &tied)?;
+        }
         Ok(Model {
+            bolts,
+            measures,
             name: self.name.clone(),
             params,
             materials,
@@ -268,6 +354,33 @@ impl Scene {
             warnings,
         })
     }
+}
+
+/// The block holding `at` (key `key`): the first, in scene order, whose outline contains
+/// it (its boundary included, to 1e-9 of its size), and the point.
+fn point_in(key: &str, at: [f64; 2], blocks: &[ModelBlock]) -> Result<(usize, DVec2), Invalid> {
+    each_within(key, &at, &limits::COORDINATE)?;
+    let p = DVec2::from(at);
+    blocks
+        .iter()
+        .position(|b| {
+            let v = b.polygon.vertices();
+            let eps = 1e-9 * b.polygon.diameter();
+            (0..v.len()).all(|k| {
+                let (a, c) = (v[k], v[(k + 1) % v.len()]);
+                (c - a).perp_dot(p - a) >= -eps * (c - a).length()
+            })
+        })
+        .map(|i| (i, p))
+        .ok_or_else(|| {
+            invalid(
+                key,
+                format!(
+                    "({}, {}) lies in no block: a point must be in the rock",
+                    at[0], at[1]
+                ),
+            )
+        })
 }
 
 /// The seams of the parts of bodies whose scene gives no `glued_edges`: every edge that
@@ -337,9 +450,13 @@ pub(crate) fn start_overlap(a: &ConvexPolygon, b: &ConvexPolygon) -> f64 {
 }
 
 /// In a static analysis every free block must rest, through blocks within d_tol of each
-/// other, on a fixed block or a fixed point: a free-floating block has no equilibrium
+/// other or tied by bolts, on a fixed block or a fixed point: a free-floating block has no equilibrium
 /// (the classic static DDA matrix is singular for it).
-fn check_static_support(blocks: &[ModelBlock], d_tol: f64) -> Result<(), Invalid> {
+fn check_static_support(
+    blocks: &[ModelBlock],
+    d_tol: f64,
+    tied: &[(usize, usize)],
+) -> Result<(), Invalid> {
     let boxes: Vec<_> = blocks.iter().map(|b| b.polygon.aabb()).collect();
     let mut pairs = Vec::new();
     dda_contact::neighbour_pairs(&boxes, d_tol, &mut pairs);
@@ -355,6 +472,11 @@ fn check_static_support(blocks: &[ModelBlock], d_tol: f64) -> Result<(), Invalid
             adjacent[a].push(b);
             adjacent[b].push(a);
         }
+    }
+    // Blocks tied by bolts support each other too.
+    for &(a, b) in tied {
+        adjacent[a].push(b);
+        adjacent[b].push(a);
     }
     // Breadth-first from every supported block.
     let mut queue: std::collections::VecDeque<usize> =
@@ -706,6 +828,36 @@ impl BlockSpec {
     }
 }
 
+/// A validated rock bolt: an axial spring between two material points.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModelBolt {
+    /// The block holding the first end.
+    pub from_block: usize,
+    /// The first end at the start, m.
+    pub from: DVec2,
+    /// The block holding the other end.
+    pub to_block: usize,
+    /// The other end at the start, m.
+    pub to: DVec2,
+    /// Axial stiffness, N/m.
+    pub stiffness: f64,
+    /// Tension at the start, N.
+    pub pretension: f64,
+    /// Tension at which it breaks, N.
+    pub strength: Option<f64>,
+}
+
+/// A validated measured point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModelMeasure {
+    /// Its name.
+    pub id: String,
+    /// The block it belongs to.
+    pub block: usize,
+    /// Where it is at the start, m.
+    pub at: DVec2,
+}
+
 /// A validated scene, ready to run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Model {
@@ -724,6 +876,10 @@ pub struct Model {
     /// Whether some block names its edges' joints or is part of a body, so that a
     /// contact's joint depends on more than its blocks' materials.
     pub joints_by_edge: bool,
+    /// Rock bolts.
+    pub bolts: Vec<ModelBolt>,
+    /// Measured points.
+    pub measures: Vec<ModelMeasure>,
     /// What is allowed but suspect (key and message), for the user to see.
     pub warnings: Vec<Invalid>,
 }

@@ -27,6 +27,9 @@ impl Simulation {
                 self.scratch.block_pairs.push((a.min(b), a.max(b)));
             }
         }
+        let mut bolts = std::mem::take(&mut self.scratch.block_pairs);
+        self.bolt_pairs(&mut bolts);
+        self.scratch.block_pairs = bolts;
         self.scratch.block_pairs.sort_unstable();
         self.scratch.block_pairs.dedup();
         if !is_subset(&self.scratch.block_pairs, &self.state.pattern) {

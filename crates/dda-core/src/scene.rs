@@ -8,7 +8,9 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
 
-pub use crate::model::{JointProps, MaterialProps, Model, ModelBlock, Params};
+pub use crate::model::{
+    JointProps, MaterialProps, Model, ModelBlock, ModelBolt, ModelMeasure, Params,
+};
 
 /// A scene as written in a file: the analysis settings, materials, joints and blocks.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -36,6 +38,44 @@ pub struct Scene {
     /// Outlines excavated during the run.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub excavations: Vec<ExcavationSpec>,
+    /// Rock bolts: axial springs between two material points.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub bolts: Vec<BoltSpec>,
+    /// Material points followed through the run (`measurements.csv`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub measure: Vec<MeasureSpec>,
+}
+
+/// A `[[bolts]]` entry: an axial spring between two material points, each attached to
+/// the block that holds it at the start.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoltSpec {
+    /// One end, m.
+    #[serde(deserialize_with = "exact::array")]
+    pub from: [f64; 2],
+    /// The other end, m.
+    #[serde(deserialize_with = "exact::array")]
+    pub to: [f64; 2],
+    /// Axial stiffness, N/m.
+    pub stiffness: f64,
+    /// Tension at the start, N.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pretension: Option<f64>,
+    /// Tension at which it breaks, N; absent, it never does.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub strength: Option<f64>,
+}
+
+/// A `[[measure]]` entry: a material point followed through the run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeasureSpec {
+    /// Its name in `measurements.csv`.
+    pub id: String,
+    /// Where it is at the start, m; it belongs to the block that holds it.
+    #[serde(deserialize_with = "exact::array")]
+    pub at: [f64; 2],
 }
 
 /// An `[[excavations]]` entry: the blocks are cut along the outline before the run, and

@@ -213,6 +213,7 @@ impl Simulation {
             }
         }
         let dt0 = p.dt0;
+        let n_bolts = model.bolts.len();
         let mut sim = Simulation {
             nd: effects.dofs_per_block(),
             model,
@@ -241,6 +242,7 @@ impl Simulation {
                     worst_ratio: 0.0,
                 },
                 violations: Vec::new(),
+                bolts: vec![Default::default(); n_bolts],
             },
             scratch: Scratch {
                 shapes,
@@ -419,8 +421,12 @@ impl Simulation {
         let result = self.try_step(&mut last_dt, &mut worst);
         match &result {
             Err(e) => self.diagnose(e, last_dt, worst),
-            // Excavations take effect at the end of the step that reaches them.
-            Ok(_) => self.remove_due(self.state.t),
+            // Bolts break, and excavations take effect, at the end of the step that
+            // reaches them.
+            Ok(_) => {
+                self.break_bolts();
+                self.remove_due(self.state.t);
+            }
         }
         result
     }

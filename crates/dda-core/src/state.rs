@@ -109,6 +109,8 @@ pub struct RunState {
     pub energy: EnergyBalance,
     /// Violations recorded by a run that goes on through them.
     pub violations: Vec<Violation>,
+    /// What has come of each bolt.
+    pub bolts: Vec<crate::bolts::BoltState>,
 }
 
 /// Everything a run needs to go on from the end of a step exactly as it would have
@@ -179,6 +181,13 @@ impl Simulation {
                 let id = &sim.model.blocks[i].id;
                 return Err(format!("block `{id}` does not match the scene's"));
             }
+        }
+        if snap.bolts.len() != sim.model.bolts.len() {
+            return Err(format!(
+                "the checkpoint has {} bolts, the scene {}",
+                snap.bolts.len(),
+                sim.model.bolts.len()
+            ));
         }
         let blocks = &snap.blocks;
         let fits = |k: &dda_contact::ContactKey| {

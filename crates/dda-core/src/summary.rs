@@ -89,6 +89,33 @@ pub struct Summary {
     /// Blocks an excavation removed, with the time they went.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub removed: Vec<Removed>,
+    /// The bolts at the end, in scene order.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub bolts: Vec<BoltSummary>,
+}
+
+/// A bolt at the end of a run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BoltSummary {
+    /// The block holding its first end.
+    pub from_block: String,
+    /// The block holding its other end.
+    pub to_block: String,
+    /// Its tension at the end, N (compression negative); absent once broken or removed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tension: Option<f64>,
+    /// When it broke, s, and its tension then, N.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub broken: Option<Broken>,
+}
+
+/// When a bolt broke.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Broken {
+    /// Time, s.
+    pub t: f64,
+    /// Its tension then, N.
+    pub tension: f64,
 }
 
 /// A block removed by an excavation.
@@ -143,6 +170,20 @@ impl Summary {
             max_penetration: t.max_penetration,
             energy_excess: sim.energy_balance().worst_ratio,
             warnings: sim.violations().iter().map(|v| v.warning()).collect(),
+            bolts: sim
+                .model()
+                .bolts
+                .iter()
+                .enumerate()
+                .map(|(k, b)| BoltSummary {
+                    from_block: sim.model().blocks[b.from_block].id.clone(),
+                    to_block: sim.model().blocks[b.to_block].id.clone(),
+                    tension: sim.bolt_tension(k),
+                    broken: sim.bolt_states()[k]
+                        .broken
+                        .map(|(t, tension)| Broken { t, tension }),
+                })
+                .collect(),
             removed: sim
                 .model()
                 .blocks

@@ -103,6 +103,8 @@ fn free_fall_is_exact() {
         joint_sets: Default::default(),
         regions: Vec::new(),
         excavations: Vec::new(),
+        bolts: Vec::new(),
+        measure: Vec::new(),
     };
     let sim = run(&scene);
     let t = sim.time();
@@ -149,6 +151,8 @@ fn incline_scene(deg: f64, friction_deg: f64) -> (Scene, glam::DVec2) {
         joint_sets: Default::default(),
         regions: Vec::new(),
         excavations: Vec::new(),
+        bolts: Vec::new(),
+        measure: Vec::new(),
     };
     (scene, u)
 }
@@ -207,6 +211,8 @@ fn collision_scene() -> Scene {
         joint_sets: Default::default(),
         regions: Vec::new(),
         excavations: Vec::new(),
+        bolts: Vec::new(),
+        measure: Vec::new(),
     }
 }
 
@@ -294,6 +300,8 @@ fn stack_of_ten_blocks_stands() {
         joint_sets: Default::default(),
         regions: Vec::new(),
         excavations: Vec::new(),
+        bolts: Vec::new(),
+        measure: Vec::new(),
     };
     let starts: Vec<_> = scene
         .validate()

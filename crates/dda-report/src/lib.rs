@@ -18,6 +18,70 @@ use std::fmt::Write as _;
 pub const HISTORY_HEADER: &str = "step,t,dt,oci,cuts,candidates,active_contacts,closed_contacts,\
 max_penetration,kinetic_energy,detection_s,assembly_s,solve_s";
 
+/// Header of measurements.csv: one row per step and measured point (docs/outputs.md).
+pub const MEASUREMENTS_HEADER: &str = "t,id,block,x,y,ux,uy,vx,vy,sxx,syy,sxy";
+
+/// The rows of measurements.csv for the state of `sim` now: each measured point's time
+/// (s), id, block, position (m), displacement since the start (m), velocity (m/s) and
+/// its block's stress (Pa, tension positive).
+pub fn measurement_rows(sim: &Simulation) -> Vec<String> {
+    let t = format!("{:e}", sim.time());
+    sim.model()
+        .measures
+        .iter()
+        .map(|m| {
+            let p = sim.material_point(m.block, m.at);
+            let v = sim.material_velocity(m.block, m.at);
+            let s = sim.blocks()[m.block].stress;
+            let u = p - m.at;
+            let mut fields = vec![
+                t.clone(),
+                m.id.clone(),
+                sim.model().blocks[m.block].id.clone(),
+            ];
+            fields.extend(
+                [p.x, p.y, u.x, u.y, v.x, v.y, s[0], s[1], s[2]]
+                    .iter()
+                    .map(|x| format!("{x:e}")),
+            );
+            csv_record(fields)
+        })
+        .collect()
+}
+
+/// Header of bolts.csv: one row per step and bolt (docs/outputs.md).
+pub const BOLTS_HEADER: &str = "t,bolt,from_block,to_block,tension,state";
+
+/// The rows of bolts.csv for the state of `sim` now: each bolt's time (s), index in the
+/// scene's order, blocks, tension (N, compression negative; empty once broken) and state
+/// (`holding`, `broken`, or `removed` with an excavated block).
+pub fn bolt_rows(sim: &Simulation) -> Vec<String> {
+    let t = format!("{:e}", sim.time());
+    sim.model()
+        .bolts
+        .iter()
+        .enumerate()
+        .map(|(k, b)| {
+            let tension = sim.bolt_tension(k);
+            let state = if sim.bolt_states()[k].broken.is_some() {
+                "broken"
+            } else if tension.is_none() {
+                "removed"
+            } else {
+                "holding"
+            };
+            csv_record([
+                t.clone(),
+                k.to_string(),
+                sim.model().blocks[b.from_block].id.clone(),
+                sim.model().blocks[b.to_block].id.clone(),
+                tension.map(|x| format!("{x:e}")).unwrap_or_default(),
+                state.to_string(),
+            ])
+        })
+        .collect()
+}
+
 /// One CSV record of `fields` (quoted where a field needs it), without its newline: the
 /// one writer of every CSV file the project writes (history.csv, the studies' tables).
 pub fn csv_record<I, F>(fields: I) -> String
