@@ -67,14 +67,19 @@ impl Simulation {
         &self.state.bolts
     }
 
-    pub(crate) fn bolt_now(&self, k: usize) -> Option<BoltNow> {
+    /// Whether bolt `k` holds: not broken, and neither of its blocks excavated.
+    fn bolt_holds(&self, k: usize) -> bool {
         let b = &self.model.bolts[k];
-        if self.state.bolts[k].broken.is_some()
-            || self.removed[b.from_block]
-            || self.removed[b.to_block]
-        {
+        self.state.bolts[k].broken.is_none()
+            && !self.removed[b.from_block]
+            && !self.removed[b.to_block]
+    }
+
+    pub(crate) fn bolt_now(&self, k: usize) -> Option<BoltNow> {
+        if !self.bolt_holds(k) {
             return None;
         }
+        let b = &self.model.bolts[k];
         let from = self.material_point(b.from_block, b.from);
         let to = self.material_point(b.to_block, b.to);
         let length = from.distance(to);
@@ -136,10 +141,7 @@ impl Simulation {
     /// The free-block pairs the holding bolts couple (for the matrix pattern).
     pub(crate) fn bolt_pairs(&self, out: &mut Vec<(u32, u32)>) {
         for (k, b) in self.model.bolts.iter().enumerate() {
-            if self.state.bolts[k].broken.is_some()
-                || self.removed[b.from_block]
-                || self.removed[b.to_block]
-            {
+            if !self.bolt_holds(k) {
                 continue;
             }
             if let (Some(a), Some(c)) = (self.free[b.from_block], self.free[b.to_block]) {

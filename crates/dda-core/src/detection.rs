@@ -54,7 +54,13 @@ impl Simulation {
         let first = self.state.totals.steps == 0;
         let glue = self.model.joints_by_edge;
         for k in 0..self.state.contacts.contacts.len() {
-            if glue && self.state.contacts.contacts[k].active && self.joint(k).glued {
+            let c = self.state.contacts.contacts[k];
+            // Only closed contacts, and with glue active ones, need their joint.
+            if !(c.state.is_closed() || glue && c.active) {
+                continue;
+            }
+            let j = self.joint(k);
+            if glue && c.active && j.glued {
                 // Parts of one body: a contact on the seam (its vertex on the edge's line,
                 // within GLUE_SEAM of d_tol) is locked and bonded where it is, unloaded,
                 // for good; any other contact between them (a vertex across a sliver
@@ -73,11 +79,10 @@ impl Simulation {
                 }
                 continue;
             }
-            // Open contacts are left as they are: only closed ones need their joint.
-            if !self.state.contacts.contacts[k].state.is_closed() {
+            // Open contacts are left as they are.
+            if !c.state.is_closed() {
                 continue;
             }
-            let j = self.joint(k);
             let c = &mut self.state.contacts.contacts[k];
             if !j.has_shear() {
                 c.state = ContactState::Sliding;

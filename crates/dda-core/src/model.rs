@@ -363,14 +363,7 @@ fn point_in(key: &str, at: [f64; 2], blocks: &[ModelBlock]) -> Result<(usize, DV
     let p = DVec2::from(at);
     blocks
         .iter()
-        .position(|b| {
-            let v = b.polygon.vertices();
-            let eps = 1e-9 * b.polygon.diameter();
-            (0..v.len()).all(|k| {
-                let (a, c) = (v[k], v[(k + 1) % v.len()]);
-                (c - a).perp_dot(p - a) >= -eps * (c - a).length()
-            })
-        })
+        .position(|b| b.polygon.contains_within(p, 1e-9 * b.polygon.diameter()))
         .map(|i| (i, p))
         .ok_or_else(|| {
             invalid(
@@ -396,17 +389,10 @@ fn glue_seams(blocks: &mut [ModelBlock], scene: &Scene) {
         let eps = 1e-9 * p.diameter();
         let glued: Vec<bool> = (0..p.len())
             .map(|k| {
-                let (a, c) = p.edge(k);
-                let d = (c - a).normalize();
-                let len = (c - a).length();
                 (0..n).any(|j| {
                     j != i
                         && blocks[j].body == blocks[i].body
-                        && blocks[j].polygon.edges().any(|(q0, q1)| {
-                            let on = |q: DVec2| d.perp_dot(q - a).abs() <= eps;
-                            let (lo, hi) = (d.dot(q1 - a).max(0.0), d.dot(q0 - a).min(len));
-                            on(q0) && on(q1) && d.dot(q1 - q0) < 0.0 && hi - lo > eps
-                        })
+                        && !p.edge_contacts(k, &blocks[j].polygon, eps).is_empty()
                 })
             })
             .collect();

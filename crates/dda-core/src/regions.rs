@@ -396,7 +396,7 @@ fn excavate(scene: &mut Scene, x: usize, e: &ExcavationSpec) -> Result<(), Inval
         .map(|k| {
             let (a, b) = (v[k], v[(k + 1) % n]);
             let line = Line::through(a, b - a);
-            let d = DVec2::new(line.normal.y, -line.normal.x);
+            let d = line.direction();
             let (ta, tb) = (d.dot(a), d.dot(b));
             Joint {
                 line,
@@ -414,11 +414,7 @@ fn excavate(scene: &mut Scene, x: usize, e: &ExcavationSpec) -> Result<(), Inval
             scene.blocks.push(b);
             continue;
         };
-        let bb = poly.aabb();
-        let apart = bb.min.x >= bounds.max.x
-            || bb.max.x <= bounds.min.x
-            || bb.min.y >= bounds.max.y
-            || bb.max.y <= bounds.min.y;
+        let apart = !poly.aabb().overlaps(&bounds);
         let Ok(shape) = Outline::new(poly.vertices().to_vec()) else {
             scene.blocks.push(b);
             continue;
@@ -464,12 +460,7 @@ fn excavate(scene: &mut Scene, x: usize, e: &ExcavationSpec) -> Result<(), Inval
             for part in &piece.parts {
                 m += 1;
                 let pv = part.vertices();
-                let holds = |q: DVec2| {
-                    (0..pv.len()).all(|k| {
-                        let (a, c) = (pv[k], pv[(k + 1) % pv.len()]);
-                        (c - a).perp_dot(q - a) >= -eps * (c - a).length()
-                    })
-                };
+                let holds = |q: DVec2| part.contains_within(q, eps);
                 let mut loads = Vec::new();
                 for l in &b.loads {
                     if holds(DVec2::from(l.at)) && !claimed(&scene.blocks, &b.id, l.at) {
@@ -551,18 +542,11 @@ fn seams(parts: &[ConvexPolygon], i: usize, may: impl Fn(usize) -> bool) -> Vec<
     let eps = 1e-9 * p.diameter();
     (0..p.len())
         .filter(|&k| {
-            let (a, c) = p.edge(k);
-            let len = (c - a).length();
-            let d = (c - a) / len;
             may(k)
-                && parts.iter().enumerate().any(|(j, q)| {
-                    j != i
-                        && q.edges().any(|(q0, q1)| {
-                            let on = |x: DVec2| d.perp_dot(x - a).abs() <= eps;
-                            let (lo, hi) = (d.dot(q1 - a).max(0.0), d.dot(q0 - a).min(len));
-                            on(q0) && on(q1) && d.dot(q1 - q0) < 0.0 && hi - lo > eps
-                        })
-                })
+                && parts
+                    .iter()
+                    .enumerate()
+                    .any(|(j, q)| j != i && !p.edge_contacts(k, q, eps).is_empty())
         })
         .collect()
 }

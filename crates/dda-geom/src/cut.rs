@@ -20,6 +20,12 @@ pub struct Line {
 }
 
 impl Line {
+    /// The unit direction d = (normal.y, -normal.x) along the line: a point's position
+    /// along it is `x . d`.
+    pub fn direction(&self) -> DVec2 {
+        DVec2::new(self.normal.y, -self.normal.x)
+    }
+
     /// The line through `point` along `direction` (any non-zero length).
     pub fn through(point: DVec2, direction: DVec2) -> Self {
         let d = direction.normalize();

@@ -285,7 +285,7 @@ pub struct Joint {
 impl Joint {
     /// The line's direction d, along which trace positions are measured.
     pub fn direction(&self) -> DVec2 {
-        DVec2::new(self.line.normal.y, -self.line.normal.x)
+        self.line.direction()
     }
 
     /// Whether the stretch `[t0, t1]` of the line overlaps a trace by more than `eps`.
@@ -428,7 +428,7 @@ impl JointFamily {
                 Line { normal, offset: p }
             };
             let traces = self.trace.map(|(length, bridge)| {
-                let d = DVec2::new(line.normal.y, -line.normal.x);
+                let d = line.direction();
                 let (t_lo, t_hi) = along(d);
                 let period = length + bridge;
                 let phase = period * 0.5 * (1.0 + rng.symmetric());
@@ -724,7 +724,7 @@ fn split_cell(
 /// The positions `t = x . d` where `line` enters and leaves the convex polygon, if it
 /// crosses it.
 fn chord(poly: &ConvexPolygon, line: &Line) -> Option<(f64, f64)> {
-    let d = DVec2::new(line.normal.y, -line.normal.x);
+    let d = line.direction();
     let v = poly.vertices();
     let n = v.len();
     let mut ts = Vec::with_capacity(2);

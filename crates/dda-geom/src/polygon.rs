@@ -272,6 +272,31 @@ impl ConvexPolygon {
         }
     }
 
+    /// The stretches of edge `k` that edges of `other` run along (anti-parallel, both
+    /// ends on the edge's line within `eps`, overlapping by more than `eps`), as ratios
+    /// `(from, to)` along edge `k`, in `other`'s edge order.
+    pub fn edge_contacts(&self, k: usize, other: &ConvexPolygon, eps: f64) -> Vec<(f64, f64)> {
+        let (a, c) = self.edge(k);
+        let len = a.distance(c);
+        let d = (c - a) / len;
+        let on = |q: DVec2| d.perp_dot(q - a).abs() <= eps;
+        other
+            .edges()
+            .filter(|&(q0, q1)| on(q0) && on(q1) && d.dot(q1 - q0) < 0.0)
+            .filter_map(|(q0, q1)| {
+                let (lo, hi) = (d.dot(q1 - a).max(0.0), d.dot(q0 - a).min(len));
+                (hi - lo > eps).then_some((lo / len, hi / len))
+            })
+            .collect()
+    }
+
+    /// Whether `p` lies in the polygon, its boundary included, or within `eps` outside
+    /// every edge's line.
+    pub fn contains_within(&self, p: DVec2, eps: f64) -> bool {
+        self.edges()
+            .all(|(a, c)| (c - a).perp_dot(p - a) >= -eps * (c - a).length())
+    }
+
     /// Rebuilds a polygon saved from a run, keeping its vertices bit for bit: checks only
     /// that there are at least three, all finite, enclosing a positive area. Polygons a
     /// run produces are affine images of validated ones, which tolerance-based validation

@@ -229,23 +229,11 @@ pub fn drawn_edges(model: &Model) -> Vec<Option<Vec<(usize, f64, f64)>>> {
                     out.push((k, 0.0, 1.0));
                     continue;
                 }
-                let (a, c) = p.edge(k);
-                let len = a.distance(c);
-                let d = (c - a) / len;
                 // The stretches of this edge other parts cover, as ratios.
-                let mut covered: Vec<(f64, f64)> = Vec::new();
-                for m in &mates {
-                    for (q0, q1) in m.edges() {
-                        let on = |q: DVec2| d.perp_dot(q - a).abs() <= eps;
-                        if on(q0) && on(q1) && d.dot(q1 - q0) < 0.0 {
-                            let (lo, hi) = (d.dot(q1 - a) / len, d.dot(q0 - a) / len);
-                            let (lo, hi) = (lo.max(0.0), hi.min(1.0));
-                            if hi > lo {
-                                covered.push((lo, hi));
-                            }
-                        }
-                    }
-                }
+                let mut covered: Vec<(f64, f64)> = mates
+                    .iter()
+                    .flat_map(|m| p.edge_contacts(k, m, eps))
+                    .collect();
                 covered.sort_by(|x, y| x.0.total_cmp(&y.0));
                 let mut from = 0.0;
                 for (lo, hi) in covered {
