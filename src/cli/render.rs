@@ -4,7 +4,9 @@
 
 use super::outdir::{check_run_folder, output_error};
 use super::{Failure, bad, validate};
-use dda::report::{Frame, Report, frame_svg, frame_view, parse_history, report_html};
+use dda::report::{
+    Frame, Report, frame_svg, frame_view, parse_bolts, parse_history, parse_points, report_html,
+};
 use dda_core::{Model, Scene, Summary};
 use std::path::Path;
 use std::process::ExitCode;
@@ -32,7 +34,8 @@ fn read_frames(path: &Path, model: &Model) -> Result<Vec<Frame>, Failure> {
                 (b.is_empty() && m.removed_at.is_some())
                     || (b.len() >= 6 && b.len().is_multiple_of(2))
             })
-            && f.contacts.len().is_multiple_of(2);
+            && f.contacts.len().is_multiple_of(2)
+            && (f.stress.is_empty() || f.stress.len() == 3 * model.blocks.len());
         if !fits {
             return Err(at(format!(
                 "the frame does not fit the scene's {} blocks",
@@ -42,6 +45,20 @@ fn read_frames(path: &Path, model: &Model) -> Result<Vec<Frame>, Failure> {
         frames.push(f);
     }
     Ok(frames)
+}
+
+/// The rows of the table `name` in `dir` read by `parse`; none if the run has no such
+/// table (its scene did not call for it).
+fn read_table<T>(
+    dir: &Path,
+    name: &str,
+    parse: fn(&str) -> Result<Vec<T>, String>,
+) -> Result<Vec<T>, Failure> {
+    let path = dir.join(name);
+    if !path.exists() {
+        return Ok(Vec::new());
+    }
+    parse(&read(&path)?).map_err(|e| bad(format!("{}: {e}", path.display())))
 }
 
 /// Draws frames/*.svg (one per frame marked `svg`) and report.html in `dir`.
@@ -55,6 +72,9 @@ pub fn render_outputs(
     let history_path = dir.join("history.csv");
     let history = parse_history(&read(&history_path)?)
         .map_err(|e| bad(format!("{}: {e}", history_path.display())))?;
+    // The per-step tables a scene may call for, when the run has them.
+    let points = read_table(dir, "measurements.csv", parse_points)?;
+    let bolts = read_table(dir, "bolts.csv", parse_bolts)?;
     let view = frame_view(model);
     let frames_dir = dir.join("frames");
     // The folder holds only our pictures (checked before: `check_run_folder` or a
@@ -76,6 +96,8 @@ pub fn render_outputs(
         model,
         summary,
         history: &history,
+        points: &points,
+        bolts: &bolts,
         frames: &frames,
         view,
     });

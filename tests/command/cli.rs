@@ -1231,6 +1231,15 @@ fn an_excavation_is_reported_and_its_run_renders_and_repeats() {
     assert!(last["blocks"][7].as_array().unwrap().is_empty());
     let o = dda(&["render", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // The report plots the measured point and the bolt from their tables.
+    let report = std::fs::read_to_string(out.join("report.html")).unwrap();
+    for title in [
+        "Displacement of `crest`",
+        "Velocity of `crest`",
+        "Bolt tension",
+    ] {
+        assert!(report.contains(title), "{title}");
+    }
     let again = dir.join("again");
     let o = run_file(&out.join("scene.json"), &again, &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -1290,4 +1299,75 @@ fn summary_gives_each_blocks_stress() {
     );
     let base = &s["blocks"][0]["stress"];
     assert_eq!(base, &serde_json::json!([0.0, 0.0, 0.0]), "the fixed base");
+}
+
+/// A seismic record's faults are bad input: exit 2 naming the record's file and line
+/// (or, for a record that cannot be read, the scene's file, key and line), nothing
+/// written; a good record's run gives the effect and a measured point.
+#[test]
+fn seismic_records_are_read_beside_the_scene_and_their_faults_named() {
+    let dir = scratch("seismic");
+    let here = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes");
+    let scene = std::fs::read_to_string(format!("{here}/quake.toml")).unwrap();
+    let record = std::fs::read_to_string(format!("{here}/quake.csv")).unwrap();
+    std::fs::write(dir.join("quake.toml"), &scene).unwrap();
+    let out = dir.join("out");
+    let key_line = scene.lines().position(|l| l.starts_with("record")).unwrap() + 1;
+    // No record file: the scene's key and line.
+    let o = run_file(&dir.join("quake.toml"), &out, &[]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains(&format!("quake.toml:{key_line}"))
+            && err.contains("seismic.record")
+            && err.contains("quake.csv"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    // A non-numeric cell on line 5, times going back on line 7: the record's line.
+    let lines: Vec<String> = record.lines().map(String::from).collect();
+    for (line, cell, says) in [
+        (5, "0.04, 1.5x, 0", "`1.5x`"),
+        (7, "0.01, 0, 0", "increase"),
+    ] {
+        let mut bad = lines.clone();
+        bad[line - 1] = cell.to_string();
+        std::fs::write(dir.join("quake.csv"), bad.join("\n")).unwrap();
+        for args in [
+            vec!["check", dir.join("quake.toml").to_str().unwrap()],
+            vec![
+                "run",
+                dir.join("quake.toml").to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ],
+        ] {
+            let o = dda(&args);
+            assert_eq!(o.status.code(), Some(2));
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert!(
+                err.contains(&format!("quake.csv:{line}")) && err.contains(says),
+                "{err}"
+            );
+        }
+        assert!(!out.exists());
+    }
+    std::fs::write(dir.join("quake.csv"), lines.join("\n")).unwrap();
+    let o = run_file(&dir.join("quake.toml"), &out, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = summary(&out);
+    assert!(
+        s["effects"].as_array().unwrap().contains(&"seismic".into()),
+        "{}",
+        s["effects"]
+    );
+    // The scene as run holds the record itself, and runs again without the file.
+    std::fs::remove_file(dir.join("quake.csv")).unwrap();
+    let again = dir.join("again");
+    let o = run_file(&out.join("scene.json"), &again, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        std::fs::read(out.join("measurements.csv")).unwrap(),
+        std::fs::read(again.join("measurements.csv")).unwrap()
+    );
 }

@@ -307,6 +307,22 @@ fn report_renders_and_animates_in_headless_chromium() {
         assert_eq!(page.eval("window.ddaReport.frame()"), json!(last));
         assert!(page.eval(INKED).as_u64().unwrap() > 1000);
 
+        // Colour by stress (the blocks are elastic): the legend says so, the canvas
+        // is drawn anew.
+        page.eval(
+            "(() => { const s = document.getElementById('colour'); s.value = 's3'; \
+             s.dispatchEvent(new Event('change')); })()",
+        );
+        let legend = page.eval("document.getElementById('legend').textContent");
+        assert!(
+            legend
+                .as_str()
+                .unwrap()
+                .starts_with("minor principal stress"),
+            "{legend}"
+        );
+        assert!(page.eval(INKED).as_u64().unwrap() > 1000);
+
         // Let any late error arrive.
         sleep_ms(100);
         page.eval("1");

@@ -10,3 +10,4 @@ mod hard_cases;
 mod hard_pairs;
 mod regions;
 mod resume;
+mod seismic;

@@ -16,9 +16,13 @@ const SLIDING_BLOCK: &str = concat!(
 /// after it.
 const EXCAVATION: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/excavation.toml");
 
+/// A wall on a shaking ground (its record in a file beside it).
+const QUAKE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/quake.toml");
+
 fn scenes() -> Vec<Scene> {
     let mut v = vec![Scene::load(Path::new(SLIDING_BLOCK)).unwrap().0];
     v.push(Scene::load(Path::new(EXCAVATION)).unwrap().0);
+    v.push(Scene::load(Path::new(QUAKE)).unwrap().0);
     for name in ["paper-5.1a-column-20", "paper-4.1-sharp-corners"] {
         v.push(dda_bench::builtin(name).unwrap());
     }

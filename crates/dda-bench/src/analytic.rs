@@ -59,6 +59,7 @@ fn scene(name: &str, analysis: Analysis, friction_deg: f64, blocks: Vec<BlockSpe
         excavations: Vec::new(),
         bolts: Vec::new(),
         measure: Vec::new(),
+        seismic: None,
     }
 }
 

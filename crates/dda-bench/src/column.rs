@@ -87,6 +87,7 @@ pub fn column_scene(name: &str, blocks: &[ConvexPolygon], analysis: Analysis) ->
         excavations: Vec::new(),
         bolts: Vec::new(),
         measure: Vec::new(),
+        seismic: None,
     }
 }
 

@@ -212,6 +212,7 @@ pub fn collision_scene(
         excavations: Vec::new(),
         bolts: Vec::new(),
         measure: Vec::new(),
+        seismic: None,
     }
 }
 

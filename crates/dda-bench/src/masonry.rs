@@ -170,6 +170,7 @@ impl Masonry {
             excavations: Vec::new(),
             bolts: Vec::new(),
             measure: Vec::new(),
+            seismic: None,
         }
     }
 }

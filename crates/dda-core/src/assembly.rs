@@ -62,6 +62,7 @@ pub(crate) const NO_ROW: Row = Row {
     g0: f64::NAN,
     blocks: [0, 0],
     c: [[0.0; 6]; 2],
+    driven: 0.0,
 };
 
 impl Simulation {
@@ -130,10 +131,14 @@ impl Simulation {
     /// normal rows, linearised there (see `springs`).
     pub(crate) fn linearise(&mut self, dt: f64) {
         self.scratch.half.clear();
+        let ground = self.ground_step(dt);
         for (i, s) in self.scratch.shapes.iter().enumerate() {
-            self.scratch.half.push(match self.free[i] {
-                Some(_) => HalfStep::new(s.centroid, &self.state.blocks[i].velocity, dt),
-                None => HalfStep::at_rest(s.centroid),
+            self.scratch.half.push(match (self.free[i], ground) {
+                (Some(_), _) => HalfStep::new(s.centroid, &self.state.blocks[i].velocity, dt),
+                (None, Some((half, step))) if self.model.blocks[i].driven => {
+                    HalfStep::driven(s.centroid, half, step)
+                }
+                (None, _) => HalfStep::at_rest(s.centroid),
             });
         }
         self.scratch.rows.clear();

@@ -37,6 +37,8 @@ pub struct Effects {
     pub glued_parts: bool,
     /// Rock bolts.
     pub bolts: bool,
+    /// Blocks driven by a ground-motion record.
+    pub seismic: bool,
 }
 
 impl Effects {
@@ -85,6 +87,7 @@ impl Effects {
             tension,
             glued_parts: blocks.iter().any(|b| b.body.is_some()),
             bolts: !model.bolts.is_empty(),
+            seismic: model.ground.is_some(),
         }
     }
 
@@ -116,6 +119,7 @@ impl Effects {
         on(self.tension, "tension");
         on(self.glued_parts, "glued-parts");
         on(self.bolts, "bolts");
+        on(self.seismic, "seismic");
         v
     }
 }

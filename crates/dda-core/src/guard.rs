@@ -6,7 +6,7 @@
 //!   penalty is too soft for the motion, or a contact was lost.
 //! - **Energy.** The mechanical energy (kinetic plus elastic strain) never exceeds what
 //!   the scene supplied, its initial kinetic and strain energy plus the work that
-//!   gravity and point loads have done since, by more than [`ENERGY_TOLERANCE`] of a
+//!   gravity, point loads, bolts and a moving ground have done since, by more than [`ENERGY_TOLERANCE`] of a
 //!   reference: the largest supply so far plus the energy the model cannot resolve
 //!   (every free block lowered by d_tol under gravity, and a contact spring pressed by
 //!   the overlap validation allows at the start, 1e-9 of the block's size). Contact
@@ -33,7 +33,8 @@ pub const ENERGY_TOLERANCE: f64 = 0.01;
 /// The running energy balance of a run, J per metre of thickness.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct EnergyBalance {
-    /// Initial kinetic and strain energy plus the work of gravity and point loads so far.
+    /// Initial kinetic and strain energy plus the work of gravity, point loads, bolts
+    /// and a moving ground so far.
     pub supplied: f64,
     /// Largest `supplied` so far.
     pub supplied_max: f64,
@@ -151,7 +152,7 @@ impl Simulation {
             }
             gains.push((ke - kinetic(mass, &b.velocity), i));
         }
-        work += self.bolt_work();
+        work += self.bolt_work() + self.ground_work();
         let supplied = self.state.energy.supplied + work;
         let reference = self.state.energy.supplied_max.max(supplied) + self.energy_floor;
         let excess = mechanical - supplied;
@@ -189,8 +190,8 @@ impl Simulation {
             let blocks: Vec<String> = gains.iter().take(3).map(|g| id(g.1)).collect();
             let what = format!(
                 "energy created: kinetic + strain energy {mechanical:.4e} J/m exceeds the \
-                 energy supplied ({supplied:.4e} J/m: initial energy and the work of \
-                 gravity and loads) by {:.2}% of the reference {reference:.4e} J/m (more \
+                 energy supplied ({supplied:.4e} J/m: initial energy and the work of gravity, \
+                 loads, bolts and the ground) by {:.2}% of the reference {reference:.4e} J/m (more \
                  than {}%); the fastest-gaining blocks: {}",
                 100.0 * ratio,
                 100.0 * ENERGY_TOLERANCE,

@@ -25,6 +25,7 @@ mod open_close;
 mod pattern;
 mod regions;
 pub mod scene;
+pub mod seismic;
 pub mod simulation;
 pub mod solver;
 pub mod springs;

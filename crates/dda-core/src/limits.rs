@@ -152,3 +152,20 @@ pub const MAX_REGION_BLOCKS: f64 = 1e6;
 /// coordinates written to 6 decimals (in m) move each vertex by at most 0.71e-6 m, so
 /// two blocks that share a face may overlap by up to 1.4e-6 m as written.
 pub const START_OVERLAP: f64 = 2e-6;
+/// `seismic` record times, s.
+pub const RECORD_TIME: Range = Range {
+    min: 0.0,
+    max: 1e7,
+    unit: "s",
+};
+/// Most samples a `seismic` record may hold (a day sampled at 10 Hz is 864,000).
+pub const MAX_RECORD_SAMPLES: f64 = 1e6;
+/// Largest `seismic` record file read, bytes: 1e6 samples of three numbers written in
+/// full precision take about 70 MB.
+pub const MAX_RECORD_BYTES: u64 = 128 << 20;
+/// `seismic.scale`.
+pub const RECORD_SCALE: Range = Range {
+    min: -1e3,
+    max: 1e3,
+    unit: "",
+};

@@ -4,6 +4,7 @@
 
 use crate::limits::{self, Range};
 use crate::scene::{Analysis, BlockSpec, Invalid, Joint, Material, Mode, Plane, Scene, invalid};
+use crate::seismic::{GroundMotion, check_samples};
 use dda_geom::{ConvexPolygon, DVec2, PolygonError, PolygonOptions, separation};
 use std::borrow::Cow;
 use std::collections::BTreeMap;
@@ -221,6 +222,7 @@ impl Scene {
             blocks.push(block);
         }
         glue_seams(&mut blocks, self);
+        let ground = self.ground_motion(&params, &mut blocks)?;
         if blocks.iter().all(|b| b.fixed || b.removed_at.is_some())
             && let Some(i) = blocks.iter().position(|b| !b.fixed)
         {
@@ -344,6 +346,7 @@ impl Scene {
         Ok(Model {
             bolts,
             measures,
+            ground,
             name: self.name.clone(),
             params,
             materials,
@@ -353,6 +356,105 @@ impl Scene {
             blocks,
             warnings,
         })
+    }
+}
+
+impl Scene {
+    /// The validated `[seismic]` table: its ground motion, with the blocks that follow it
+    /// marked `driven` and fixed (they move as the record says, not by the equations).
+    fn ground_motion(
+        &self,
+        params: &Params,
+        blocks: &mut [ModelBlock],
+    ) -> Result<Option<GroundMotion>, Invalid> {
+        let Some(spec) = &self.seismic else {
+            return Ok(None);
+        };
+        if params.mode == Mode::Static {
+            return Err(invalid(
+                "seismic",
+                "ground motion needs a dynamic analysis: set analysis.mode = \"dynamic\"",
+            ));
+        }
+        if spec.samples.is_empty() {
+            return Err(invalid(
+                "seismic",
+                "no record: give `record` (a CSV file of t, ax, ay) or `samples`",
+            ));
+        }
+        if let Err((i, m)) = check_samples(&spec.samples) {
+            return Err(invalid(format!("seismic.samples[{i}]"), m));
+        }
+        let scale = match spec.scale {
+            Some(s) => within("seismic.scale", s, &limits::RECORD_SCALE)?,
+            None => 1.0,
+        };
+        let mut driven = vec![false; blocks.len()];
+        match &spec.blocks {
+            None => {
+                for (d, b) in driven.iter_mut().zip(blocks.iter()) {
+                    *d = b.fixed;
+                }
+            }
+            Some(names) => {
+                for (k, name) in names.iter().enumerate() {
+                    // A block by its id, or every block cut from the region of that id.
+                    let prefix = format!("{name}.");
+                    let mut found = false;
+                    for (d, b) in driven.iter_mut().zip(blocks.iter()) {
+                        if b.id == *name || b.id.starts_with(&prefix) {
+                            *d = true;
+                            found = true;
+                        }
+                    }
+                    if !found {
+                        return Err(invalid(
+                            format!("seismic.blocks[{k}]"),
+                            format!("no block or region has the id `{name}`"),
+                        ));
+                    }
+                }
+            }
+        }
+        if !driven.contains(&true) {
+            return Err(invalid(
+                "seismic.blocks",
+                "no block follows the ground motion: fix the ground blocks or name them here",
+            ));
+        }
+        let mut list = Vec::new();
+        for (i, (b, &d)) in blocks.iter_mut().zip(&driven).enumerate() {
+            if d {
+                b.fixed = true;
+                b.driven = true;
+                b.velocity = [0.0; 6];
+                list.push(i);
+            }
+        }
+        // The parts of a body move together: all driven or none.
+        for b in blocks.iter() {
+            if let Some(body) = b.body
+                && let Some(other) = blocks
+                    .iter()
+                    .find(|o| o.body == Some(body) && o.driven != b.driven)
+            {
+                return Err(invalid(
+                    "seismic.blocks",
+                    format!(
+                        "`{}` follows the ground and `{}`, a part of the same body, does not",
+                        if b.driven { &b.id } else { &other.id },
+                        if b.driven { &other.id } else { &b.id }
+                    ),
+                ));
+            }
+        }
+        if blocks.iter().all(|b| b.fixed) {
+            return Err(invalid(
+                "seismic.blocks",
+                "every block follows the ground or is fixed, so nothing responds to it",
+            ));
+        }
+        Ok(Some(GroundMotion::new(&spec.samples, scale, list)))
     }
 }
 
@@ -763,6 +865,8 @@ pub struct ModelBlock {
     pub glued: Vec<bool>,
     /// When the block is removed (excavated), s.
     pub removed_at: Option<f64>,
+    /// Whether it follows the ground motion (it is then also fixed).
+    pub driven: bool,
 }
 
 impl BlockSpec {
@@ -806,6 +910,7 @@ impl BlockSpec {
             edge_joints: Vec::new(),
             body: None,
             glued: Vec::new(),
+            driven: false,
             removed_at: match self.removed_at {
                 Some(t) => Some(within(&format!("{key}.removed_at"), t, &limits::REMOVAL)?),
                 None => None,
@@ -866,6 +971,8 @@ pub struct Model {
     pub bolts: Vec<ModelBolt>,
     /// Measured points.
     pub measures: Vec<ModelMeasure>,
+    /// The ground motion, when the scene has a `[seismic]` record.
+    pub ground: Option<GroundMotion>,
     /// What is allowed but suspect (key and message), for the user to see.
     pub warnings: Vec<Invalid>,
 }

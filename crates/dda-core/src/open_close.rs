@@ -238,7 +238,8 @@ impl Simulation {
         }
     }
 
-    /// Copies the solution into per-block motions (zero for fixed blocks).
+    /// Copies the solution into per-block motions (zero for fixed blocks, the ground's
+    /// for driven ones).
     pub(crate) fn gather_solution(&mut self) {
         let nd = self.nd;
         self.scratch.motions.clear();
@@ -246,6 +247,8 @@ impl Simulation {
             self.scratch.d[i] = [0.0; 6];
             if let Some(f) = f {
                 self.scratch.d[i][..nd].copy_from_slice(self.scratch.system.solution(*f));
+            } else if let Some(u) = self.scratch.half[i].driven {
+                self.scratch.d[i][..2].copy_from_slice(&[u.x, u.y]);
             }
             self.scratch.motions.push(Motion::new(
                 self.scratch.shapes[i].centroid,

@@ -44,6 +44,34 @@ pub struct Scene {
     /// Material points followed through the run (`measurements.csv`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub measure: Vec<MeasureSpec>,
+    /// Ground motion: blocks that follow an acceleration record.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seismic: Option<SeismicSpec>,
+}
+
+/// The `[seismic]` table: the ground's acceleration record and the blocks that follow it.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SeismicSpec {
+    /// A CSV file of `t, ax, ay` (s, m/s^2) under a header line, relative to the scene
+    /// file. Reading the scene reads it into `samples` and clears this key, so that the
+    /// scene as run (`scene.json`, checkpoints, `dda build`) holds the record itself.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub record: Option<String>,
+    /// The record's samples `[t, ax, ay]`, written in the scene instead of a file.
+    #[serde(
+        default,
+        skip_serializing_if = "Vec::is_empty",
+        deserialize_with = "exact::list"
+    )]
+    pub samples: Vec<[f64; 3]>,
+    /// Factor on the accelerations; 1 if absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale: Option<f64>,
+    /// The blocks that follow the ground (a block id, or a region's id for every block
+    /// cut from it); absent: every fixed block.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub blocks: Option<Vec<String>>,
 }
 
 /// A `[[bolts]]` entry: an axial spring between two material points, each attached to
@@ -426,19 +454,21 @@ impl Scene {
             }
         };
         let text = std::fs::read_to_string(path).map_err(|e| fail(format!("cannot read: {e}")))?;
-        Scene::parse_indexed(&text, format, &file)
+        Scene::parse_indexed(&text, format, &file, path.parent())
     }
 
     /// Parses and validates scene text; `file` names it in errors.
     pub fn parse(text: &str, format: Format, file: &str) -> Result<(Scene, Model), SceneError> {
-        Scene::parse_indexed(text, format, file).map(|(scene, model, _)| (scene, model))
+        Scene::parse_indexed(text, format, file, None).map(|(scene, model, _)| (scene, model))
     }
 
-    /// [`Scene::parse`], also returning where the text's keys are.
+    /// [`Scene::parse`], also returning where the text's keys are; a seismic record's
+    /// file is found in `dir` (the scene file's directory; None: the current one).
     fn parse_indexed(
         text: &str,
         format: Format,
         file: &str,
+        dir: Option<&Path>,
     ) -> Result<(Scene, Model, LineIndex), SceneError> {
         if let Some(line) = nesting_beyond(text, format == Format::Toml, limits::MAX_NESTING) {
             return Err(SceneError {
@@ -461,7 +491,7 @@ impl Scene {
             key,
             message,
         };
-        let scene: Scene = match format {
+        let mut scene: Scene = match format {
             Format::Toml => {
                 let de = toml::Deserializer::parse(text).map_err(|e| {
                     error(
@@ -505,10 +535,57 @@ impl Scene {
                 scene
             }
         };
+        scene.read_record(dir, |message| {
+            error("seismic.record".to_string(), None, message)
+        })?;
         let model = scene
             .validate()
             .map_err(|v| error(v.key, None, v.message))?;
         Ok((scene, model, index))
+    }
+
+    /// Reads the `[seismic]` record file into `samples` (and clears `record`), found in
+    /// `dir` when its path is relative. An error in the file names the file and line; one
+    /// in finding or opening it goes through `at_key` (the scene's key and line).
+    fn read_record(
+        &mut self,
+        dir: Option<&Path>,
+        at_key: impl Fn(String) -> SceneError,
+    ) -> Result<(), SceneError> {
+        let Some(spec) = self.seismic.as_mut() else {
+            return Ok(());
+        };
+        let Some(record) = spec.record.take() else {
+            return Ok(());
+        };
+        if !spec.samples.is_empty() {
+            return Err(at_key(
+                "give the record as a file (record) or in the scene (samples), not both".into(),
+            ));
+        }
+        let path = match dir {
+            Some(d) if Path::new(&record).is_relative() => d.join(&record),
+            _ => Path::new(&record).to_path_buf(),
+        };
+        let shown = path.display().to_string();
+        let text = read_limited(&path, limits::MAX_RECORD_BYTES)
+            .map_err(|e| at_key(format!("the record `{shown}` {e}")))?;
+        let in_file = |line: usize, message: String| SceneError {
+            file: shown.clone(),
+            key: String::new(),
+            line: Some(line),
+            message: format!("{message} (the seismic record)"),
+        };
+        let (samples, lines) =
+            crate::seismic::read_record(&text).map_err(|(line, m)| in_file(line, m))?;
+        if let Err((i, m)) = crate::seismic::check_samples(&samples) {
+            return Err(match lines.get(i) {
+                Some(&line) => in_file(line, m),
+                None => at_key(format!("the record `{shown}`: {m}")),
+            });
+        }
+        spec.samples = samples;
+        Ok(())
     }
 
     /// Multiplies the contact tolerance and the largest step displacement by `r`
@@ -521,6 +598,25 @@ impl Scene {
 }
 
 /// `serde_path_to_error`'s path as `a.b[3].c`.
+/// The text of the regular file at `path` if it holds at most `limit` bytes of UTF-8;
+/// else why not, as the end of a sentence naming the file.
+fn read_limited(path: &Path, limit: u64) -> Result<String, String> {
+    use std::io::Read;
+    let meta = std::fs::metadata(path).map_err(|e| format!("cannot be read: {e}"))?;
+    if !meta.is_file() {
+        return Err("is not a regular file".into());
+    }
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot be read: {e}"))?;
+    let mut bytes = Vec::new();
+    file.take(limit + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| format!("cannot be read: {e}"))?;
+    if bytes.len() as u64 > limit {
+        return Err(format!("is larger than {limit} bytes"));
+    }
+    String::from_utf8(bytes).map_err(|_| "is not UTF-8 text".into())
+}
+
 fn path_string(path: &serde_path_to_error::Path) -> String {
     use serde_path_to_error::Segment;
     let mut s = String::new();

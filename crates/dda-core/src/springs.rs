@@ -30,6 +30,9 @@ pub struct HalfStep {
     /// None for a block at rest: its points stay where they are, bit for bit.
     motion: Option<Motion>,
     centroid: DVec2,
+    /// A driven block's motion over the whole step, known before it (`seismic`): rows
+    /// fold it into their value.
+    pub(crate) driven: Option<DVec2>,
 }
 
 impl HalfStep {
@@ -43,6 +46,18 @@ impl HalfStep {
         HalfStep {
             motion: Some(Motion::new(centroid, &d)),
             centroid: centroid + DVec2::new(d[0], d[1]),
+            driven: None,
+        }
+    }
+
+    /// A block driven by the ground: translated by `half` at the half step and by
+    /// `step` over the whole step.
+    pub fn driven(centroid: DVec2, half: DVec2, step: DVec2) -> Self {
+        let d = [half.x, half.y, 0.0, 0.0, 0.0, 0.0];
+        HalfStep {
+            motion: Some(Motion::new(centroid, &d)),
+            centroid: centroid + half,
+            driven: Some(step),
         }
     }
 
@@ -51,6 +66,7 @@ impl HalfStep {
         HalfStep {
             motion: None,
             centroid,
+            driven: None,
         }
     }
 
@@ -70,6 +86,9 @@ pub struct Row {
     pub blocks: [u32; 2],
     /// Coefficients over each block's unknowns.
     pub c: [Vec6; 2],
+    /// The part of `g0` that is a driven block's known motion over the step (its
+    /// coefficients times that motion, then zeroed): 0 unless a block is driven.
+    pub driven: f64,
 }
 
 impl Row {
@@ -134,11 +153,30 @@ pub fn normal_row(c: &Contact, shapes: &[BlockShape], half: &[HalfStep]) -> Row 
     let g: Vec6 = std::array::from_fn(|m| {
         inv * (g2[0] * t2[0][m] + g2[1] * t2[1][m] + g3[0] * t3[0][m] + g3[1] * t3[1][m])
     });
-    Row {
-        g0: s0 * inv,
-        blocks: [c.key.vertex_block, c.key.edge_block],
-        c: [e, g],
+    fold_driven(
+        Row {
+            g0: s0 * inv,
+            blocks: [c.key.vertex_block, c.key.edge_block],
+            c: [e, g],
+            driven: 0.0,
+        },
+        half,
+    )
+}
+
+/// Folds the known motion of a driven block of `row` into its value (see `seismic`):
+/// q = g0 + c_a . D_a + c_b . D_b with D_b known is g0 + c_b . D_b + c_a . D_a.
+#[inline]
+fn fold_driven(mut row: Row, half: &[HalfStep]) -> Row {
+    for (b, c) in row.blocks.iter().zip(row.c.iter_mut()) {
+        if let Some(u) = half[*b as usize].driven {
+            let e = c[0] * u.x + c[1] * u.y;
+            row.g0 += e;
+            row.driven += e;
+            *c = [0.0; 6];
+        }
     }
+    row
 }
 
 /// The tangential displacement of the vertex relative to the point at ratio `anchor`
@@ -157,11 +195,15 @@ pub fn shear_row(c: &Contact, shapes: &[BlockShape], half: &[HalfStep], anchor: 
     for v in cb.iter_mut() {
         *v = -*v;
     }
-    Row {
-        g0,
-        blocks: [c.key.vertex_block, c.key.edge_block],
-        c: [along(t, p1, ci), cb],
-    }
+    fold_driven(
+        Row {
+            g0,
+            blocks: [c.key.vertex_block, c.key.edge_block],
+            c: [along(t, p1, ci), cb],
+            driven: 0.0,
+        },
+        half,
+    )
 }
 
 /// Length of the edge a contact's vertex lies against: the cohesion and tensile strength

@@ -65,12 +65,13 @@ pub(crate) const DT_FLOOR: f64 = 1e-9;
 impl Simulation {
     /// The largest step the blocks' current velocities allow: the smaller of d_max over
     /// the fastest vertex speed (strain rates included) and theta_max over the fastest
-    /// spin, infinite when nothing moves.
+    /// spin, infinite when nothing moves. Driven blocks count: the ground's motion is
+    /// held to d_max per step as a free block's.
     pub(crate) fn velocity_room(&self) -> f64 {
         let p = &self.model.params;
         let (mut speed, mut spin) = (0.0f64, 0.0f64);
         for (i, s) in self.scratch.shapes.iter().enumerate() {
-            if self.free[i].is_none() {
+            if self.free[i].is_none() && !self.model.blocks[i].driven {
                 continue;
             }
             let v = &self.state.blocks[i].velocity;
@@ -83,13 +84,13 @@ impl Simulation {
     }
 
     /// Largest vertex displacement (first order) and largest |rotation| of the trial
-    /// solution.
+    /// solution, driven blocks included.
     pub(crate) fn largest_motion(&self) -> (f64, f64, Option<usize>) {
         let (mut disp, mut rot) = (0.0f64, 0.0f64);
         let (mut worst, mut worst_ratio) = (None, 0.0);
         let p = &self.model.params;
         for (i, s) in self.scratch.shapes.iter().enumerate() {
-            if self.free[i].is_none() {
+            if self.free[i].is_none() && !self.model.blocks[i].driven {
                 continue;
             }
             let d = &self.scratch.d[i];

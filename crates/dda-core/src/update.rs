@@ -38,8 +38,19 @@ impl Simulation {
             }
         }
         let dynamic = model.params.mode == Mode::Dynamic;
+        let ground_velocity = self.model.ground.as_ref().map(|g| g.at(t + dt).1);
         for i in 0..self.state.blocks.len() {
             if self.free[i].is_none() {
+                if let (Some(v), Some(u)) = (ground_velocity, self.scratch.half[i].driven) {
+                    // A driven block: moved by the ground over the step, at its velocity.
+                    let c = self.scratch.shapes[i].centroid;
+                    let b = &mut self.state.blocks[i];
+                    b.polygon
+                        .displace(c, &[u.x, u.y, 0.0, 0.0, 0.0, 0.0])
+                        .map_err(|_| inverted(i))?;
+                    b.velocity = [v.x, v.y, 0.0, 0.0, 0.0, 0.0];
+                    self.scratch.shapes[i].set(&b.polygon);
+                }
                 continue;
             }
             let d = self.scratch.d[i];

@@ -105,6 +105,7 @@ fn free_fall_is_exact() {
         excavations: Vec::new(),
         bolts: Vec::new(),
         measure: Vec::new(),
+        seismic: None,
     };
     let sim = run(&scene);
     let t = sim.time();
@@ -153,6 +154,7 @@ fn incline_scene(deg: f64, friction_deg: f64) -> (Scene, glam::DVec2) {
         excavations: Vec::new(),
         bolts: Vec::new(),
         measure: Vec::new(),
+        seismic: None,
     };
     (scene, u)
 }
@@ -213,6 +215,7 @@ fn collision_scene() -> Scene {
         excavations: Vec::new(),
         bolts: Vec::new(),
         measure: Vec::new(),
+        seismic: None,
     }
 }
 
@@ -302,6 +305,7 @@ fn stack_of_ten_blocks_stands() {
         excavations: Vec::new(),
         bolts: Vec::new(),
         measure: Vec::new(),
+        seismic: None,
     };
     let starts: Vec<_> = scene
         .validate()

@@ -27,25 +27,71 @@ pub struct HistoryRow {
 
 /// Reads history.csv (with its header); errors name the line.
 pub fn parse_history(text: &str) -> Result<Vec<HistoryRow>, String> {
+    let names = [
+        "t",
+        "dt",
+        "oci",
+        "active_contacts",
+        "max_penetration",
+        "kinetic_energy",
+    ];
+    csv_columns(text, &names)?
+        .into_iter()
+        .map(|(line, c)| {
+            let n = |k: usize| number(&c[k], line, names[k]);
+            Ok(HistoryRow {
+                t: n(0)?,
+                dt: n(1)?,
+                oci: n(2)?,
+                active_contacts: n(3)?,
+                max_penetration: n(4)?,
+                kinetic_energy: n(5)?,
+            })
+        })
+        .collect()
+}
+
+/// One row of measurements.csv, the columns the report plots.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PointRow {
+    /// Simulated time, s.
+    pub t: f64,
+    /// The measured point's id.
+    pub id: String,
+    /// Displacement since the start, m.
+    pub u: [f64; 2],
+    /// Velocity, m/s.
+    pub v: [f64; 2],
+}
+
+/// One row of bolts.csv, the columns the report plots.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BoltRow {
+    /// Simulated time, s.
+    pub t: f64,
+    /// The bolt's index in the scene.
+    pub bolt: usize,
+    /// Its tension, N; None once broken or excavated.
+    pub tension: Option<f64>,
+}
+
+/// The rows of a CSV `text` with a header, each as its `names` columns' cells (line
+/// number first); errors name the line.
+fn csv_columns(text: &str, names: &[&str]) -> Result<Vec<(u64, Vec<String>)>, String> {
     let mut reader = csv::ReaderBuilder::new().from_reader(text.as_bytes());
     let header = reader
         .headers()
         .map_err(|e| format!("line 1: {e}"))?
         .clone();
-    let col = |name: &str| {
-        header
-            .iter()
-            .position(|h| h == name)
-            .ok_or_else(|| format!("line 1: no column `{name}`"))
-    };
-    let cols = [
-        col("t")?,
-        col("dt")?,
-        col("oci")?,
-        col("active_contacts")?,
-        col("max_penetration")?,
-        col("kinetic_energy")?,
-    ];
+    let cols = names
+        .iter()
+        .map(|name| {
+            header
+                .iter()
+                .position(|h| h == *name)
+                .ok_or_else(|| format!("line 1: no column `{name}`"))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
     let mut rows = Vec::new();
     for record in reader.records() {
         let record = record.map_err(|e| match e.position() {
@@ -53,23 +99,55 @@ pub fn parse_history(text: &str) -> Result<Vec<HistoryRow>, String> {
             None => e.to_string(),
         })?;
         let line = record.position().map_or(0, |p| p.line());
-        let mut v = [0.0; 6];
-        for (slot, &c) in v.iter_mut().zip(&cols) {
-            *slot = record
-                .get(c)
-                .and_then(|f| f.parse::<f64>().ok())
-                .ok_or_else(|| format!("line {line}: column {} is not a number", c + 1))?;
-        }
-        rows.push(HistoryRow {
-            t: v[0],
-            dt: v[1],
-            oci: v[2],
-            active_contacts: v[3],
-            max_penetration: v[4],
-            kinetic_energy: v[5],
-        });
+        let cells = cols
+            .iter()
+            .map(|&c| record.get(c).unwrap_or_default().to_string())
+            .collect();
+        rows.push((line, cells));
     }
     Ok(rows)
+}
+
+/// `cell` as a number, or the error naming `line` and `name`.
+fn number(cell: &str, line: u64, name: &str) -> Result<f64, String> {
+    cell.parse::<f64>()
+        .map_err(|_| format!("line {line}: column {name} is not a number"))
+}
+
+/// Reads measurements.csv (with its header); errors name the line.
+pub fn parse_points(text: &str) -> Result<Vec<PointRow>, String> {
+    let names = ["t", "id", "ux", "uy", "vx", "vy"];
+    csv_columns(text, &names)?
+        .into_iter()
+        .map(|(line, c)| {
+            let n = |k: usize| number(&c[k], line, names[k]);
+            Ok(PointRow {
+                t: n(0)?,
+                id: c[1].clone(),
+                u: [n(2)?, n(3)?],
+                v: [n(4)?, n(5)?],
+            })
+        })
+        .collect()
+}
+
+/// Reads bolts.csv (with its header); errors name the line.
+pub fn parse_bolts(text: &str) -> Result<Vec<BoltRow>, String> {
+    csv_columns(text, &["t", "bolt", "tension"])?
+        .into_iter()
+        .map(|(line, c)| {
+            Ok(BoltRow {
+                t: number(&c[0], line, "t")?,
+                bolt: c[1]
+                    .parse()
+                    .map_err(|_| format!("line {line}: column bolt is not an index"))?,
+                tension: match c[2].as_str() {
+                    "" => None,
+                    x => Some(number(x, line, "tension")?),
+                },
+            })
+        })
+        .collect()
 }
 
 /// What report.html shows.
@@ -83,6 +161,10 @@ pub struct Report<'a> {
     pub summary: &'a Summary,
     /// history.csv.
     pub history: &'a [HistoryRow],
+    /// measurements.csv (empty without measured points).
+    pub points: &'a [PointRow],
+    /// bolts.csv (empty without bolts).
+    pub bolts: &'a [BoltRow],
     /// frames.jsonl.
     pub frames: &'a [Frame],
     /// The box the animation shows.
@@ -175,8 +257,13 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
 <input id="slider" type="range" min="0" max="{}" value="0" step="1" aria-label="time">
 <span id="time"></span></div>
 <canvas id="view" width="{cw:.0}" height="{ch:.0}"></canvas>
-<p>Blocks coloured by speed, from blue (at rest) to red (<span id="vmax"></span> m/s); fixed blocks grey; red dots: active closed contacts; dashed: the rock an excavation removes.</p>"#,
-        r.frames.len().saturating_sub(1)
+<p>{colour_by}Blocks coloured by <span id="legend"></span>; fixed blocks grey; red dots: active closed contacts; dashed: the rock an excavation removes.</p>"#,
+        r.frames.len().saturating_sub(1),
+        colour_by = if r.frames.iter().any(|f| !f.stress.is_empty()) {
+            r#"<label>Colour by <select id="colour"><option value="speed">speed</option><option value="s1">major principal stress</option><option value="s3">minor principal stress</option><option value="mean">mean normal stress</option></select></label> "#
+        } else {
+            ""
+        }
     );
 
     // Time histories.
@@ -211,6 +298,7 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
         page.push_str(&plot(title, "t (s)", ylabel, &series(f), true, false));
     }
     page.push_str("</div>\n");
+    point_and_bolt_plots(&mut page, r);
 
     // Summary and parameters.
     page.push_str("<h2>Summary</h2>\n<table>\n");
@@ -305,6 +393,97 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
     page
 }
 
+/// Most measured points the report plots (each has two plots); the others are in
+/// measurements.csv.
+const PLOTTED_POINTS: usize = 12;
+
+/// The plots of the measured points (displacement and velocity against time, one pair
+/// per point) and of the bolts' tensions, when the run has them.
+fn point_and_bolt_plots(page: &mut String, r: &Report) {
+    if !r.points.is_empty() {
+        let mut ids: Vec<&str> = Vec::new();
+        for p in r.points {
+            if !ids.contains(&p.id.as_str()) {
+                ids.push(&p.id);
+            }
+        }
+        page.push_str("<h2>Measured points</h2>\n");
+        if ids.len() > PLOTTED_POINTS {
+            let _ = writeln!(
+                page,
+                "<p>The first {PLOTTED_POINTS} of {} points; every point is in measurements.csv.</p>",
+                ids.len()
+            );
+        }
+        page.push_str("<div class=\"plots\">\n");
+        for id in ids.iter().take(PLOTTED_POINTS) {
+            let rows: Vec<&PointRow> = r.points.iter().filter(|p| p.id == *id).collect();
+            for (what, unit, f) in [
+                (
+                    "Displacement",
+                    "m",
+                    (|p: &PointRow| p.u) as fn(&PointRow) -> [f64; 2],
+                ),
+                ("Velocity", "m/s", |p: &PointRow| p.v),
+            ] {
+                let mut series = Vec::new();
+                for (c, axis) in ["x", "y"].iter().enumerate() {
+                    let points: Vec<(f64, f64)> = rows.iter().map(|p| (p.t, f(p)[c])).collect();
+                    for (name, s) in envelope_of(&points) {
+                        let name = if name.is_empty() {
+                            axis.to_string()
+                        } else {
+                            format!("{axis} {name}")
+                        };
+                        series.push((name, s));
+                    }
+                }
+                let title = format!("{what} of `{id}`");
+                page.push_str(&plot(&title, "t (s)", unit, &series, true, false));
+            }
+        }
+        page.push_str("</div>\n");
+    }
+    if !r.bolts.is_empty() {
+        let n = r.bolts.iter().map(|b| b.bolt + 1).max().unwrap_or(0);
+        let mut series = Vec::new();
+        for k in 0..n {
+            let points: Vec<(f64, f64)> = r
+                .bolts
+                .iter()
+                .filter(|b| b.bolt == k)
+                .filter_map(|b| b.tension.map(|x| (b.t, 1e-3 * x)))
+                .collect();
+            for (name, s) in envelope_of(&points) {
+                series.push((format!("bolt {k} {name}").trim_end().to_string(), s));
+            }
+        }
+        page.push_str("<h2>Bolts</h2>\n<div class=\"plots\">\n");
+        page.push_str(&plot(
+            "Bolt tension (compression negative; a line ends where its bolt broke)",
+            "t (s)",
+            "kN",
+            &series,
+            true,
+            false,
+        ));
+        page.push_str("</div>\n");
+    }
+}
+
+/// [`envelope`] of a series of (t, y) points.
+fn envelope_of(points: &[(f64, f64)]) -> Vec<(String, Vec<(f64, f64)>)> {
+    let rows: Vec<HistoryRow> = points
+        .iter()
+        .map(|&(t, y)| HistoryRow {
+            t,
+            kinetic_energy: y,
+            ..HistoryRow::default()
+        })
+        .collect();
+    envelope(&rows, |r| r.kinetic_energy)
+}
+
 /// The series of `f` over the history `h` for a plot: every step when there are at most
 /// [`PLOT_POINTS`]; else, over each run of `h.len() / PLOT_POINTS` steps (rounded up), its
 /// largest and smallest value at the time of the step that has it (two series, `max` and
@@ -340,13 +519,38 @@ const SCRIPT: &str = r##""use strict";
   const scale = Math.min(sx, sy);
   const px = (x) => (x - x0) * scale;
   const py = (y) => canvas.height - (y - y0) * scale;
-  let vmax = 0;
-  for (const f of frames) {
-    f.speed.forEach((v, i) => { if (!data.fixed[i] && v > vmax) vmax = v; });
+  // What colours a block: its speed, or a measure of its stress (tension positive).
+  const measures = {
+    speed: { name: "speed", unit: "m/s", of: (f, i) => f.speed[i] },
+    s1: { name: "major principal stress", unit: "kPa", of: (f, i) => principal(f, i, 1) },
+    s3: { name: "minor principal stress", unit: "kPa", of: (f, i) => principal(f, i, -1) },
+    mean: { name: "mean normal stress", unit: "kPa", of: (f, i) => 0.5e-3 * (f.stress[3 * i] + f.stress[3 * i + 1]) },
+  };
+  function principal(f, i, sign) {
+    const [a, b, c] = [f.stress[3 * i], f.stress[3 * i + 1], f.stress[3 * i + 2]];
+    return 1e-3 * (0.5 * (a + b) + sign * Math.hypot(0.5 * (a - b), c));
   }
-  document.getElementById("vmax").textContent = vmax.toPrecision(3);
-  const colour = (v) => {
-    const s = vmax > 0 ? Math.min(v / vmax, 1) : 0;
+  const select = document.getElementById("colour");
+  let measure = measures.speed, lo = 0, hi = 0;
+  function setMeasure() {
+    measure = measures[select ? select.value : "speed"];
+    lo = measure === measures.speed ? 0 : Infinity;
+    hi = measure === measures.speed ? 0 : -Infinity;
+    for (const f of frames) {
+      f.speed.forEach((_, i) => {
+        if (data.fixed[i] || f.blocks[i].length === 0) return;
+        const v = measure.of(f, i);
+        if (v < lo) lo = v;
+        if (v > hi) hi = v;
+      });
+    }
+    if (!(hi > lo)) { hi = lo + 1; }
+    document.getElementById("legend").textContent = measure.name + ", from blue (" +
+      lo.toPrecision(3) + " " + measure.unit + ") to red (" + hi.toPrecision(3) + " " + measure.unit + ")";
+  }
+  setMeasure();
+  const colour = (f, i) => {
+    const s = Math.min(Math.max((measure.of(f, i) - lo) / (hi - lo), 0), 1);
     return "hsl(" + (240 - 240 * s).toFixed(0) + ", 75%, 60%)";
   };
   let k = 0;
@@ -364,7 +568,7 @@ const SCRIPT: &str = r##""use strict";
         else ctx.lineTo(px(b[j]), py(b[j + 1]));
       }
       ctx.closePath();
-      ctx.fillStyle = data.fixed[i] ? "#b0b0b0" : colour(f.speed[i]);
+      ctx.fillStyle = data.fixed[i] ? "#b0b0b0" : colour(f, i);
       ctx.fill();
       const parts = data.drawn[i];
       if (parts === null) {
@@ -421,6 +625,7 @@ const SCRIPT: &str = r##""use strict";
   }
   play.addEventListener("click", () => { if (timer === null) start(); else stop(); });
   slider.addEventListener("input", () => { stop(); k = Number(slider.value); draw(); });
+  if (select) select.addEventListener("change", () => { setMeasure(); draw(); });
   window.ddaReport = { frame: () => k, frames: frames.length, playing: () => timer !== null };
   if (frames.length > 0) draw();
 })();

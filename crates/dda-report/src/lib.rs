@@ -6,7 +6,9 @@
 mod html;
 mod plot;
 
-pub use self::html::{HistoryRow, Report, parse_history, report_html};
+pub use self::html::{
+    BoltRow, HistoryRow, PointRow, Report, parse_bolts, parse_history, parse_points, report_html,
+};
 pub use self::plot::plot;
 
 use dda_core::{Model, Simulation, StepRecord};
@@ -135,6 +137,19 @@ pub struct Frame {
     pub speed: Vec<f64>,
     /// Where the active closed contacts are (their vertices), flattened x, y.
     pub contacts: Vec<f64>,
+    /// Each block's stress, flattened sxx, syy, sxy (Pa, tension positive, four
+    /// significant digits); empty for a run of rigid blocks.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub stress: Vec<f64>,
+}
+
+/// `x` to four significant digits (plenty for a colour), so that frames print short.
+fn four_digits(x: f64) -> f64 {
+    if x == 0.0 || !x.is_finite() {
+        return 0.0;
+    }
+    let scale = 10f64.powi(3 - x.abs().log10().floor() as i32);
+    (x * scale).round() / scale
 }
 
 impl Frame {
@@ -163,17 +178,16 @@ impl Frame {
         let speed = sim
             .blocks()
             .iter()
-            .map(|b| {
-                let v = glam::DVec2::new(b.velocity[0], b.velocity[1]).length();
-                // Four significant digits are plenty for a colour.
-                if v > 0.0 {
-                    let scale = 10f64.powi(3 - v.log10().floor() as i32);
-                    (v * scale).round() / scale
-                } else {
-                    0.0
-                }
-            })
+            .map(|b| four_digits(glam::DVec2::new(b.velocity[0], b.velocity[1]).length()))
             .collect();
+        let stress = if sim.effects().elasticity {
+            sim.blocks()
+                .iter()
+                .flat_map(|b| b.stress.map(four_digits))
+                .collect()
+        } else {
+            Vec::new()
+        };
         let mut contacts = Vec::new();
         for c in sim.contacts().active().filter(|c| {
             c.state.is_closed()
@@ -191,6 +205,7 @@ impl Frame {
             blocks,
             speed,
             contacts,
+            stress,
         }
     }
 

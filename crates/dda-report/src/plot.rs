@@ -42,8 +42,8 @@ pub fn plot(
 <line x1="{m}" y1="{}" x2="{}" y2="{}" stroke="black"/><line x1="{m}" y1="{m}" x2="{m}" y2="{}" stroke="black"/>
 <text x="{}" y="{}" text-anchor="middle">{}</text>
 <text x="15" y="{}" transform="rotate(-90 15 {})" text-anchor="middle">{}</text>
-<text x="{m}" y="{}" text-anchor="middle">{x0:.3}</text><text x="{}" y="{}" text-anchor="middle">{x1:.3}</text>
-<text x="{}" y="{}" text-anchor="end">{y0:.3}</text><text x="{}" y="{m}" text-anchor="end">{y1:.3}</text>
+<text x="{m}" y="{}" text-anchor="middle">{}</text><text x="{}" y="{}" text-anchor="middle">{}</text>
+<text x="{}" y="{}" text-anchor="end">{}</text><text x="{}" y="{m}" text-anchor="end">{}</text>
 "#,
         w / 2.0,
         escape(title),
@@ -58,11 +58,15 @@ pub fn plot(
         h / 2.0,
         escape(ylabel),
         h - m + 15.0,
+        tick(x0),
         w - m,
         h - m + 15.0,
+        tick(x1),
         m - 5.0,
         h - m,
+        tick(y0),
         m - 5.0,
+        tick(y1),
     );
     for (k, (name, p)) in series.iter().enumerate() {
         let c = colours[k % colours.len()];
@@ -95,4 +99,34 @@ pub fn plot(
     }
     s.push_str("</svg>\n");
     s
+}
+
+/// An axis end's label: four significant digits, in exponent form outside 1e-3 to 1e5
+/// (so that a millimetre's fraction does not print as 0.000).
+pub fn tick(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 {
+        "0".into()
+    } else if (1e-3..1e5).contains(&a) {
+        let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+        format!("{v:.decimals$}")
+    } else {
+        format!("{v:.3e}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::tick;
+
+    /// Four significant digits whatever the scale, never a bare 0.000 for a non-zero end.
+    #[test]
+    fn ticks_keep_four_significant_digits() {
+        assert_eq!(tick(0.0), "0");
+        assert_eq!(tick(1.465), "1.465");
+        assert_eq!(tick(-5933.08), "-5933");
+        assert_eq!(tick(0.0021), "0.002100");
+        assert_eq!(tick(-0.000123), "-1.230e-4");
+        assert_eq!(tick(2.5e7), "2.500e7");
+    }
 }
