@@ -66,7 +66,7 @@ pub struct Limits {
     /// stops the run (exit 1) with the last good state.
     #[arg(long)]
     keep_going: bool,
-    /// Stop after this many steps in all (exit 1, the state kept for `dda resume`).
+    /// Stop after this many steps of this process (exit 1, the state kept for `dda resume`).
     #[arg(long, value_name = "N")]
     max_steps: Option<u64>,
     /// Most memory the global matrix's factor may take, in bytes or with a suffix K, M
@@ -253,6 +253,39 @@ pub fn run(args: RunArgs) -> Result<ExitCode, Failure> {
 /// Runs `dda resume`.
 pub fn resume(args: ResumeArgs) -> Result<ExitCode, Failure> {
     let (work, out) = work_and_out(&args.dir);
+    // A run that stopped before its end (--max-steps, a failure) was moved into place
+    // with its checkpoint: once that checkpoint is known to load, the run goes back to
+    // staging to go on, and is moved into place again however the resumed process
+    // ends; if the resume is refused before it starts, it is put back as it was.
+    let stopped = out.join(CHECKPOINT_FILE);
+    let moved = !work.exists() && stopped.is_file();
+    if moved {
+        check_out(&out)?;
+        let failed = std::fs::read_to_string(out.join("summary.json"))
+            .ok()
+            .and_then(|t| serde_json::from_str::<Summary>(&t).ok())
+            .is_some_and(|s| s.status == "failed");
+        if failed && !args.limits.keep_going {
+            return Err(bad(format!(
+                "{} is a run that failed (see its summary.json): resumed as it is, it would                  fail the same way; `dda resume {} --keep-going` goes on through a step                  that breaks physics",
+                out.display(),
+                out.display()
+            )));
+        }
+        Checkpoint::load(&stopped).map_err(|e| bad(e.to_string()))?;
+        std::fs::rename(&out, &work).map_err(|e| output_error(e, &work))?;
+    }
+    let result = resume_staged(args, &work, &out);
+    if moved && matches!(result, Err(Failure::Input(_))) && !out.exists() {
+        let _ = std::fs::rename(&work, &out);
+        let _ = std::fs::remove_file(out.join(super::outdir::LOCK));
+    }
+    result
+}
+
+/// [`resume`] of the run whose staging folder is `work` and output folder `out`.
+fn resume_staged(args: ResumeArgs, work: &Path, out: &Path) -> Result<ExitCode, Failure> {
+    let (work, out) = (work.to_path_buf(), out.to_path_buf());
     let path = work.join(CHECKPOINT_FILE);
     // A folder in use is named as such before anything else is said of it.
     let staging = if work.is_dir() {
@@ -576,6 +609,8 @@ impl Job {
             None
         };
         let duration = self.sim.model().params.duration;
+        // --max-steps counts this process's steps (a resumed run's from where it resumed).
+        let first = self.sim.totals().steps;
         let mut end = End::Done;
         while !self.sim.finished() {
             if let Some(sig) = self.signals.caught() {
@@ -583,7 +618,7 @@ impl Job {
                 break;
             }
             if let Some(n) = self.max_steps
-                && self.sim.totals().steps >= n
+                && self.sim.totals().steps - first >= n
             {
                 end = End::Stopped(format!(
                     "stopped after {n} steps (--max-steps) at t = {:.6} s of {duration} s",
@@ -633,9 +668,11 @@ impl Job {
             End::Signal(_) => unreachable!("handled above"),
         };
         if error.is_some() {
-            // The last good state: as the final frame, and as a checkpoint.
-            self.write_frame(true)?;
+            // The last good state: as a checkpoint, then as the final frame (after the
+            // checkpoint, so that a resume drops it and goes on as the run would have).
             self.checkpoint()?;
+            self.write_frame(true)?;
+            self.flush(true)?;
         } else {
             self.flush(false)?;
         }

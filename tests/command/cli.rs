@@ -339,9 +339,18 @@ fn failed_simulation_exits_1_and_keeps_last_good_state() {
     let frames = std::fs::read_to_string(out.join("frames.jsonl")).unwrap();
     let last: serde_json::Value = serde_json::from_str(frames.lines().last().unwrap()).unwrap();
     assert_eq!(last["t"].as_f64().unwrap(), t);
-    // A failed run is not resumable: it would fail again the same way.
+    // A failed run resumes only with --keep-going: as it is, it would fail again the
+    // same way.
+    let before = listing(&out);
     let o = dda(&["resume", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--keep-going"));
+    assert_eq!(listing(&out), before);
+    let o = dda(&["resume", out.to_str().unwrap(), "--keep-going", "--quiet"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = summary(&out);
+    assert_eq!(s["status"], "completed");
+    assert!(s["time_simulated"].as_f64().unwrap() > t);
 }
 
 #[test]
@@ -1352,9 +1361,23 @@ fn seismic_records_are_read_beside_the_scene_and_their_faults_named() {
         }
         assert!(!out.exists());
     }
+    // A record cut in mid-swing leaves the ground moving: a warning, not an error.
+    std::fs::write(dir.join("quake.csv"), lines[..12].join("\n")).unwrap();
+    let o = dda(&["check", dir.join("quake.toml").to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains(&format!("quake.toml:{}", key_line - 1)) && err.contains("baseline"),
+        "{err}"
+    );
     std::fs::write(dir.join("quake.csv"), lines.join("\n")).unwrap();
     let o = run_file(&dir.join("quake.toml"), &out, &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        o.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     let s = summary(&out);
     assert!(
         s["effects"].as_array().unwrap().contains(&"seismic".into()),
@@ -1370,4 +1393,56 @@ fn seismic_records_are_read_beside_the_scene_and_their_faults_named() {
         std::fs::read(out.join("measurements.csv")).unwrap(),
         std::fs::read(again.join("measurements.csv")).unwrap()
     );
+}
+
+/// A run stopped by `--max-steps` resumes from its output folder, `--max-steps` at a
+/// time, to the uninterrupted run's outputs: history.csv (timing aside), frames.jsonl,
+/// measurements.csv and bolts.csv, and the summary. A resume refused before it starts
+/// (a damaged checkpoint) leaves the stopped run as it was.
+#[test]
+fn a_stopped_run_resumes_step_budget_by_budget_to_the_whole_run() {
+    let dir = scratch("budget");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/excavation.toml");
+    let whole = dir.join("whole");
+    assert!(run_file(Path::new(scene), &whole, &[]).status.success());
+    let out = dir.join("out");
+    let o = run_file(Path::new(scene), &out, &["--max-steps", "20"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(summary(&out)["steps"], 20);
+
+    // A damaged checkpoint: refused (exit 2), the folder left as it was.
+    let ck = out.join("checkpoint.bin");
+    let good = std::fs::read(&ck).unwrap();
+    std::fs::write(&ck, &good[..good.len() / 2]).unwrap();
+    let before = listing(&out);
+    let o = dda(&["resume", out.to_str().unwrap(), "--quiet"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(listing(&out), before);
+    assert!(!dir.join(".out.partial").exists());
+    std::fs::write(&ck, &good).unwrap();
+
+    let o = dda(&[
+        "resume",
+        out.to_str().unwrap(),
+        "--quiet",
+        "--max-steps",
+        "15",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(summary(&out)["steps"], 35);
+    let o = dda(&["resume", out.to_str().unwrap(), "--quiet"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(!out.join("checkpoint.bin").exists());
+    assert_eq!(untimed_summary(&out), untimed_summary(&whole));
+    assert_eq!(
+        untimed_history(&out.join("history.csv")),
+        untimed_history(&whole.join("history.csv"))
+    );
+    for f in ["frames.jsonl", "measurements.csv", "bolts.csv"] {
+        assert_eq!(
+            std::fs::read(out.join(f)).unwrap(),
+            std::fs::read(whole.join(f)).unwrap(),
+            "{f}"
+        );
+    }
 }

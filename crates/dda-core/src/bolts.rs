@@ -20,6 +20,26 @@ use crate::simulation::Simulation;
 use dda_geom::DVec2;
 use serde::{Deserialize, Serialize};
 
+/// The coordinates (a, b) of point `p` in the frame of a convex polygon's first three
+/// `vertices`: p = v0 + a (v1 - v0) + b (v2 - v0). A block's points keep them as it
+/// moves (its motion is affine), so a material point is found again from them
+/// ([`from_affine`]). A convex polygon's first three vertices are never collinear.
+pub fn affine_coordinates(vertices: &[DVec2], p: DVec2) -> [f64; 2] {
+    let (e1, e2, q) = (
+        vertices[1] - vertices[0],
+        vertices[2] - vertices[0],
+        p - vertices[0],
+    );
+    let det = e1.perp_dot(e2);
+    [q.perp_dot(e2) / det, e1.perp_dot(q) / det]
+}
+
+/// The point of coordinates `ab` ([`affine_coordinates`]) in the frame of `vertices`.
+pub fn from_affine(vertices: &[DVec2], ab: [f64; 2]) -> DVec2 {
+    let (v0, v1, v2) = (vertices[0], vertices[1], vertices[2]);
+    v0 + ab[0] * (v1 - v0) + ab[1] * (v2 - v0)
+}
+
 /// What a bolt has come to: broken or not.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct BoltState {
@@ -38,15 +58,8 @@ pub(crate) struct BoltNow {
 impl Simulation {
     /// Where the material point that was at `start` in block `block` at t = 0 is now.
     pub fn material_point(&self, block: usize, start: DVec2) -> DVec2 {
-        let m = self.model.blocks[block].polygon.vertices();
-        let c = self.state.blocks[block].polygon.vertices();
-        // start = m0 + a (m1 - m0) + b (m2 - m0); a convex polygon's first three
-        // vertices are never collinear.
-        let (e1, e2, q) = (m[1] - m[0], m[2] - m[0], start - m[0]);
-        let det = e1.perp_dot(e2);
-        let a = q.perp_dot(e2) / det;
-        let b = e1.perp_dot(q) / det;
-        c[0] + a * (c[1] - c[0]) + b * (c[2] - c[0])
+        let [a, b] = affine_coordinates(self.model.blocks[block].polygon.vertices(), start);
+        from_affine(self.state.blocks[block].polygon.vertices(), [a, b])
     }
 
     /// The velocity of the material point that was at `start` in block `block`, m/s.

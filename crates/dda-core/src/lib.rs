@@ -35,7 +35,7 @@ pub mod time_step;
 pub mod timing;
 mod update;
 
-pub use self::bolts::BoltState;
+pub use self::bolts::{BoltState, affine_coordinates, from_affine};
 pub use self::checkpoint::{Checkpoint, CheckpointError};
 pub use self::diagnosis::{ContactNote, Diagnosis, SimError};
 pub use self::effects::Effects;

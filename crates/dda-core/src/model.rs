@@ -223,6 +223,22 @@ impl Scene {
         }
         glue_seams(&mut blocks, self);
         let ground = self.ground_motion(&params, &mut blocks)?;
+        let mut drift = ground.as_ref().and_then(|g| {
+            let (end, peak) = g.end_and_peak_velocity();
+            (end.length() > GROUND_DRIFT * peak).then(|| {
+                invalid(
+                    "seismic",
+                    format!(
+                        "the record ends with the ground moving at ({:.3e}, {:.3e}) m/s, {:.0}% \
+                         of its peak speed, and it keeps that velocity to the end of the run: \
+                         a record that is not baseline-corrected",
+                        end.x,
+                        end.y,
+                        100.0 * end.length() / peak
+                    ),
+                )
+            })
+        });
         if blocks.iter().all(|b| b.fixed || b.removed_at.is_some())
             && let Some(i) = blocks.iter().position(|b| !b.fixed)
         {
@@ -242,6 +258,7 @@ impl Scene {
         check_start_overlaps(&blocks)?;
         let mut warnings = unit_slips(self);
         warnings.append(&mut unused);
+        warnings.extend(drift.take());
         if params.d_tol < 2.0 * params.d_max {
             warnings.push(invalid(
                 "analysis.contact_tolerance",
@@ -358,6 +375,11 @@ impl Scene {
         })
     }
 }
+
+/// The share of its peak speed a record may leave the ground moving at, at its end,
+/// before a warning says it is not baseline-corrected (the ground then moves on at that
+/// velocity).
+const GROUND_DRIFT: f64 = 0.01;
 
 impl Scene {
     /// The validated `[seismic]` table: its ground motion, with the blocks that follow it

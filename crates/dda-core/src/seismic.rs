@@ -73,6 +73,14 @@ impl GroundMotion {
         (u, v)
     }
 
+    /// The ground's velocity after the record ends, and the largest speed it reaches
+    /// at a sample before: a record that is not baseline-corrected leaves the ground
+    /// moving on.
+    pub fn end_and_peak_velocity(&self) -> (DVec2, f64) {
+        let end = self.v.last().copied().unwrap_or(DVec2::ZERO);
+        (end, self.v.iter().map(|v| v.length()).fold(0.0, f64::max))
+    }
+
     /// The ground's displacement from `t0` to `t1`.
     pub fn displacement(&self, t0: f64, t1: f64) -> DVec2 {
         self.at(t1).0 - self.at(t0).0

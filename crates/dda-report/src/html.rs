@@ -257,7 +257,7 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
 <input id="slider" type="range" min="0" max="{}" value="0" step="1" aria-label="time">
 <span id="time"></span></div>
 <canvas id="view" width="{cw:.0}" height="{ch:.0}"></canvas>
-<p>{colour_by}Blocks coloured by <span id="legend"></span>; fixed blocks grey; red dots: active closed contacts; dashed: the rock an excavation removes.</p>"#,
+<p>{colour_by}Blocks coloured by <span id="legend"></span>; fixed blocks grey; red dots: active closed contacts; dashed: the rock an excavation removes; green lines: bolts (until they break); black squares: measured points.</p>"#,
         r.frames.len().saturating_sub(1),
         colour_by = if r.frames.iter().any(|f| !f.stress.is_empty()) {
             r#"<label>Colour by <select id="colour"><option value="speed">speed</option><option value="s1">major principal stress</option><option value="s3">minor principal stress</option><option value="mean">mean normal stress</option></select></label> "#
@@ -381,6 +381,30 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
                     .iter()
                     .flat_map(|v| [v.x, v.y])
                     .collect::<Vec<f64>>()
+            })
+            .collect::<Vec<_>>(),
+        // Bolts (both ends as affine coordinates in their blocks, and when they broke)
+        // and measured points, drawn where their blocks carry them.
+        "bolts": r
+            .model
+            .bolts
+            .iter()
+            .enumerate()
+            .map(|(k, b)| {
+                let at = |block: usize, p| {
+                    dda_core::affine_coordinates(r.model.blocks[block].polygon.vertices(), p)
+                };
+                let broken = s.bolts.get(k).and_then(|x| x.broken).map(|x| x.t);
+                serde_json::json!([b.from_block, at(b.from_block, b.from), b.to_block, at(b.to_block, b.to), broken])
+            })
+            .collect::<Vec<_>>(),
+        "points": r
+            .model
+            .measures
+            .iter()
+            .map(|m| {
+                let ab = dda_core::affine_coordinates(r.model.blocks[m.block].polygon.vertices(), m.at);
+                serde_json::json!([m.block, ab, m.id])
             })
             .collect::<Vec<_>>(),
     });
@@ -601,6 +625,28 @@ const SCRIPT: &str = r##""use strict";
       ctx.stroke();
     });
     ctx.setLineDash([]);
+    // A material point of block i in frame f, from its affine coordinates.
+    const at = (f, i, [a, b]) => {
+      const v = f.blocks[i];
+      return [v[0] + a * (v[2] - v[0]) + b * (v[4] - v[0]), v[1] + a * (v[3] - v[1]) + b * (v[5] - v[1])];
+    };
+    ctx.strokeStyle = "#006400";
+    ctx.lineWidth = 2;
+    for (const [i, ai, j, aj, broken] of data.bolts) {
+      if (f.blocks[i].length === 0 || f.blocks[j].length === 0 || (broken !== null && f.t >= broken)) continue;
+      const [p, q] = [at(f, i, ai), at(f, j, aj)];
+      ctx.beginPath();
+      ctx.moveTo(px(p[0]), py(p[1]));
+      ctx.lineTo(px(q[0]), py(q[1]));
+      ctx.stroke();
+    }
+    ctx.lineWidth = 0.6;
+    ctx.fillStyle = "#000000";
+    for (const [i, ab] of data.points) {
+      if (f.blocks[i].length === 0) continue;
+      const p = at(f, i, ab);
+      ctx.fillRect(px(p[0]) - 3, py(p[1]) - 3, 6, 6);
+    }
     ctx.fillStyle = "#d00000";
     for (let j = 0; j < f.contacts.length; j += 2) {
       ctx.beginPath();
