@@ -8,6 +8,7 @@ mod columns;
 mod flush_joints;
 mod hard_cases;
 mod hard_pairs;
+mod impacts;
 mod regions;
 mod resume;
 mod seismic;

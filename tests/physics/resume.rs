@@ -23,6 +23,11 @@ fn scenes() -> Vec<Scene> {
     let mut v = vec![Scene::load(Path::new(SLIDING_BLOCK)).unwrap().0];
     v.push(Scene::load(Path::new(EXCAVATION)).unwrap().0);
     v.push(Scene::load(Path::new(QUAKE)).unwrap().0);
+    // The average-acceleration rule carries each block's acceleration (impact_steps).
+    let mut impacts = Scene::load(Path::new(QUAKE)).unwrap().0;
+    impacts.name = "quake-impact-steps".into();
+    impacts.analysis.impact_steps = Some(10);
+    v.push(impacts);
     for name in ["paper-5.1a-column-20", "paper-4.1-sharp-corners"] {
         v.push(dda_bench::builtin(name).unwrap());
     }

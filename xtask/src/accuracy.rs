@@ -11,8 +11,9 @@
 //!
 //! Writes `docs/accuracy.md` and `docs/results/accuracy/*.svg` (or under `--out DIR`).
 
-use dda_bench::analytic::{self, Rebound};
+use dda_bench::analytic::{self, Rebound, Restitution};
 use dda_bench::{PAPER_COLUMNS, mechanical_energy, potential_energy};
+use dda_core::scene::Integration;
 use dda_core::{RunOptions, Scene, Simulation};
 use dda_report::plot;
 use std::fmt::Write as _;
@@ -111,6 +112,212 @@ fn run_case(case: &Case, varied: &'static str, value: f64) -> Run {
     run
 }
 
+/// One run of an impact: what was varied, steps, wall seconds, restitution.
+struct Impact {
+    varied: &'static str,
+    value: String,
+    steps: u64,
+    seconds: f64,
+    restitution: f64,
+    failed: Option<String>,
+}
+
+/// The impact cases: name, scene builder, duration, dt0, d_max, base penalty, rigid
+/// blocks (the closed form's), and the restitution measure.
+type ImpactCase = (
+    &'static str,
+    fn(dda_core::scene::Analysis) -> Scene,
+    f64,
+    f64,
+    f64,
+    f64,
+    fn(&Restitution) -> f64,
+);
+
+const IMPACT_CASES: [ImpactCase; 2] = [
+    (
+        "collision",
+        analytic::collision,
+        0.02,
+        0.005,
+        0.005,
+        1e9,
+        Restitution::collision,
+    ),
+    (
+        "drop",
+        analytic::rebound,
+        0.45,
+        0.001,
+        0.001,
+        1e10,
+        Restitution::rebound,
+    ),
+];
+
+/// `impact_steps` values of the study (None: the key absent).
+const IMPACT_STEPS: [Option<u32>; 6] = [None, Some(2), Some(5), Some(10), Some(20), Some(40)];
+
+fn run_impact(
+    case: &ImpactCase,
+    varied: &'static str,
+    steps: Option<u32>,
+    integration: Option<Integration>,
+    penalty: f64,
+) -> Impact {
+    let (_, build, duration, dt0, d_max, _, measure) = *case;
+    let mut analysis = analytic::analytic_analysis(duration, dt0, d_max, None, penalty);
+    analysis.deformable = false;
+    analysis.impact_steps = steps;
+    analysis.integration = integration;
+    let value = match varied {
+        "penalty" => format!("{penalty:e}"),
+        _ => steps.map_or("none".into(), |n| n.to_string()),
+    };
+    let mut run = Impact {
+        varied,
+        value,
+        steps: 0,
+        seconds: 0.0,
+        restitution: f64::NAN,
+        failed: None,
+    };
+    let model = match build(analysis).validate() {
+        Ok(m) => m,
+        Err(e) => {
+            run.failed = Some(format!("{}: {}", e.key, e.message));
+            return run;
+        }
+    };
+    let mut sim = Simulation::new(model, RunOptions::default());
+    let mut r = Restitution::default();
+    let result = sim.run(|s, _| r.step(s));
+    run.steps = sim.totals().steps;
+    run.seconds = sim.totals().total_s;
+    run.restitution = measure(&r);
+    run.failed = result.err().map(|e| e.to_string());
+    run
+}
+
+/// The impacts section: restitution of the collision and of the drop (rigid blocks)
+/// against `impact_steps`, under either rule, and against the penalty.
+fn impacts(doc: &mut String, pictures: &Path) -> Result<(), String> {
+    doc.push_str(
+        "## Impacts: restitution against `impact_steps`\n\n\
+         Rigid blocks, frictionless elastic contact: the closed form is restitution 1. The\n\
+         collision: two 1 m squares meeting at 1 m/s, no gravity (dt0 = 5 ms, d_max = 5 mm,\n\
+         p = 1e9 N/m). The drop: a 1 m square dropped 0.5 m onto a fixed base (dt0 = 1 ms,\n\
+         d_max = 1 mm, p = 1e10 N/m). `impact_steps` varied with the rule it brings\n\
+         (average acceleration; `none`: the key absent, Shi's constant acceleration),\n\
+         with the constant-acceleration rule kept (to tell the time step from the rule),\n\
+         and the penalty varied at `impact_steps = 10`. Error: |1 - restitution|.\n\n",
+    );
+    for case in &IMPACT_CASES {
+        let (name, _, _, _, _, penalty, _) = *case;
+        eprintln!("accuracy: {name}");
+        let mut runs = Vec::new();
+        for n in IMPACT_STEPS {
+            runs.push(run_impact(case, "impact_steps", n, None, penalty));
+        }
+        for n in IMPACT_STEPS.into_iter().flatten() {
+            runs.push(run_impact(
+                case,
+                "impact_steps, constant acceleration",
+                Some(n),
+                Some(Integration::ConstantAcceleration),
+                penalty,
+            ));
+        }
+        for p in PENALTY_VALUES {
+            runs.push(run_impact(case, "penalty", Some(10), None, p));
+        }
+        let _ = writeln!(doc, "### {name}\n");
+        doc.push_str("| varied | value | steps | wall s | restitution | error |\n");
+        doc.push_str("| --- | ---: | ---: | ---: | ---: | ---: |\n");
+        for r in &runs {
+            let (e, err) = match &r.failed {
+                Some(f) => (format!("failed: {f}"), String::new()),
+                None => (
+                    format!("{:.4}", r.restitution),
+                    format!("{:.2e}", (1.0 - r.restitution).abs()),
+                ),
+            };
+            let _ = writeln!(
+                doc,
+                "| {} | {} | {} | {:.4} | {e} | {err} |",
+                r.varied, r.value, r.steps, r.seconds
+            );
+        }
+        let series: Vec<(String, Vec<(f64, f64)>)> = [
+            "impact_steps",
+            "impact_steps, constant acceleration",
+            "penalty",
+        ]
+        .iter()
+        .map(|v| {
+            let pts = runs
+                .iter()
+                .filter(|r| r.varied == *v && r.failed.is_none())
+                .map(|r| {
+                    (
+                        r.seconds.max(1e-6).log10(),
+                        (1.0 - r.restitution).abs().max(1e-6).log10(),
+                    )
+                })
+                .collect();
+            (format!("{v} varied"), pts)
+        })
+        .collect();
+        error_plot(
+            doc,
+            pictures,
+            name,
+            &format!("impact-{name}.svg"),
+            "restitution error",
+            "log10 |1 - restitution|",
+            &series,
+        )?;
+    }
+    doc.push_str(
+        "### Reading (2026-11-24)\n\n\
+         - Without `impact_steps` the contact spans one or two steps and the impact keeps\n  \
+         three quarters (collision) or half (drop) of its speed.\n\
+         - Resolving it in N steps with Shi's constant-acceleration rule is not enough: the\n  \
+         rule damps the contact's oscillation, and the restitution rises only slowly with N\n  \
+         (0.78 at 10, 0.94 at 40), as a one-spring model of the rule predicts (0.79 and\n  \
+         0.94). The average-acceleration rule keeps the spring's energy: 0.997 and 1.000\n  \
+         at N = 10, for a few tens of percent more steps than the key absent. What remains\n  \
+         is the step the contact opens in (see docs/method.md section 12); at N = 2 it\n  \
+         dominates. The penalty matters little once the impact is resolved; the softest\n  \
+         (1e7 N/m) loses 3% in the collision, whose blocks then travel far within a step.\n\n",
+    );
+    Ok(())
+}
+
+/// Writes the plot of `series` (log10 error against log10 wall seconds, one series per
+/// parameter varied) as `pictures/file` and links it from `doc`.
+fn error_plot(
+    doc: &mut String,
+    pictures: &Path,
+    name: &str,
+    file: &str,
+    what: &str,
+    ylabel: &str,
+    series: &[(String, Vec<(f64, f64)>)],
+) -> Result<(), String> {
+    let svg = plot(
+        &format!("{name}: {what} against wall time"),
+        "log10 wall seconds",
+        ylabel,
+        series,
+        false,
+        true,
+    );
+    std::fs::write(pictures.join(file), svg).map_err(|e| format!("{file}: {e}"))?;
+    let _ = writeln!(doc, "\n![{name}](results/accuracy/{file})\n");
+    Ok(())
+}
+
 /// Runs the study and writes the document and its plots under `out`.
 pub fn run(out: &Path) -> Result<(), String> {
     let pictures = out.join("results").join("accuracy");
@@ -166,17 +373,15 @@ pub fn run(out: &Path) -> Result<(), String> {
                 (format!("{v} varied"), pts)
             })
             .collect();
-        let file = format!("{}.svg", name.replace(' ', "-"));
-        let svg = plot(
-            &format!("{name}: error against wall time"),
-            "log10 wall seconds",
+        error_plot(
+            &mut doc,
+            &pictures,
+            name,
+            &format!("{}.svg", name.replace(' ', "-")),
+            "error",
             "log10 relative error",
             &series,
-            false,
-            true,
-        );
-        std::fs::write(pictures.join(&file), svg).map_err(|e| format!("{file}: {e}"))?;
-        let _ = writeln!(doc, "\n![{name}](results/accuracy/{file})\n");
+        )?;
     }
 
     doc.push_str(
@@ -207,8 +412,9 @@ pub fn run(out: &Path) -> Result<(), String> {
          contact) and softer penalties bring the apex back towards the drop height, at a\n  \
          cost in steps. This dissipation never creates energy, so the verdict of section 4\n  \
          (energy not created) holds, but a user who needs restitution must resolve the\n  \
-         contact in time.\n\n",
+         contact in time: `impact_steps` below.\n\n",
     );
+    impacts(&mut doc, &pictures)?;
     doc.push_str(
         "## The paper's columns: penetration and energy against time\n\n\
          Cover detector, r_tol 1, Table 3's parameters. Penetration is the largest over the\n\

@@ -1,6 +1,6 @@
 //! Scenes with a closed-form answer, for accuracy studies (`cargo xtask accuracy`): free
-//! fall, a block sliding down an incline with friction, and a block dropped onto a fixed
-//! base that bounces back. Each comes with its exact answer and a measure of a run's
+//! fall, a block sliding down an incline with friction, a block dropped onto a fixed
+//! base that bounces back, and two blocks meeting head on. Each comes with its exact answer and a measure of a run's
 //! error against it. Rock of density 2600 kg/m^3, E = 1 GPa, nu = 0.25; g = 9.81 m/s^2.
 
 use crate::column::{rock, rock_block as block};
@@ -38,6 +38,8 @@ pub fn analytic_analysis(
         plane: Plane::Stress,
         max_oci: 6,
         frames: 0,
+        impact_steps: None,
+        integration: None,
     }
 }
 
@@ -176,6 +178,61 @@ impl Rebound {
         } else {
             1.0
         }
+    }
+}
+
+/// Two unit squares on a line, 0.5 mm apart, without gravity or friction, the left one
+/// moving right at 1 m/s: elastic contact springs between rigid blocks exchange their
+/// velocities (restitution 1).
+pub fn collision(mut analysis: Analysis) -> Scene {
+    analysis.gravity = None;
+    let mut left = block(
+        "left",
+        vec![
+            [-1.0005, 0.0],
+            [-0.0005, 0.0],
+            [-0.0005, 1.0],
+            [-1.0005, 1.0],
+        ],
+        false,
+    );
+    left.velocity = Some([1.0, 0.0]);
+    let right = block(
+        "right",
+        vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+        false,
+    );
+    scene("collision", analysis, 0.0, vec![left, right])
+}
+
+/// The restitution of a [`collision`] run (the last two blocks' relative speed along x
+/// over the 1 m/s they met at, at the end) or of a [`rebound`] run (the block's largest
+/// upward speed after the impact over sqrt(2 g DROP), the speed it struck at): call
+/// [`Restitution::step`] after every step.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct Restitution {
+    rebound_speed: f64,
+    relative_speed: f64,
+}
+
+impl Restitution {
+    /// Records the state after a step.
+    pub fn step(&mut self, sim: &Simulation) {
+        let b = sim.blocks();
+        if let [.., a, z] = b {
+            self.rebound_speed = self.rebound_speed.max(z.velocity[1]);
+            self.relative_speed = z.velocity[0] - a.velocity[0];
+        }
+    }
+
+    /// The restitution of a collision run.
+    pub fn collision(&self) -> f64 {
+        self.relative_speed
+    }
+
+    /// The restitution of a rebound run.
+    pub fn rebound(&self) -> f64 {
+        self.rebound_speed / (2.0 * G * DROP).sqrt()
     }
 }
 

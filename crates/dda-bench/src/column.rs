@@ -117,6 +117,8 @@ pub fn paper_analysis(
         plane: Plane::Stress,
         max_oci: 6,
         frames: 10,
+        impact_steps: None,
+        integration: None,
     }
 }
 

@@ -155,6 +155,8 @@ impl Masonry {
                 plane: Plane::Stress,
                 max_oci: 6,
                 frames: 2,
+                impact_steps: None,
+                integration: None,
             },
             materials: rock(2600.0, 1e9, 0.25),
             joints: BTreeMap::from([(

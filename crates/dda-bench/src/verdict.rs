@@ -241,6 +241,7 @@ mod tests {
             rotation: 0.0,
             loads: Vec::new(),
             fixed_points: Vec::new(),
+            acceleration: [0.0; 6],
         }
     }
 

@@ -7,7 +7,7 @@
 use crate::diagnosis::SimError;
 use crate::effects::Effects;
 use crate::kinematics::{Mat6, Vec6, along, elasticity, mass_matrix};
-use crate::scene::{JointProps, Model};
+use crate::scene::{Integration, JointProps, Mode, Model};
 use crate::simulation::Simulation;
 use crate::solver::{BlockSystem, Entry};
 use crate::springs::{HalfStep, Row, contact_length, normal_row, shear_row};
@@ -81,8 +81,9 @@ impl Simulation {
         self.scratch.base_f.resize(n, [0.0; 6]);
         self.scratch.mass.resize(n, [[0.0; 6]; 6]);
         let (model, blocks, eff) = (&self.model, &self.state.blocks, self.effects);
+        let rule = self.step_rule();
         let terms = |(((k, f), mass), &i): (((&mut Mat6, &mut Vec6), &mut Mat6), &u32)| {
-            (*k, *f, *mass) = block_terms(model, eff, &blocks[i as usize], i as usize, dt);
+            (*k, *f, *mass) = block_terms(model, eff, rule, &blocks[i as usize], i as usize, dt);
         };
         #[cfg(feature = "rayon")]
         if self.options.parallel && n >= PARALLEL_MIN_BLOCKS {
@@ -283,13 +284,16 @@ impl Simulation {
     }
 }
 
-/// A free block's terms that do not depend on contacts, at step size `dt`: its stiffness
-/// (inertia 2/dt^2 M, elasticity, fixed-point springs), right-hand side (inertia 2/dt M V,
+/// A free block's terms that do not depend on contacts, at step size `dt` under `rule`:
+/// its stiffness (inertia, elasticity, fixed-point springs), right-hand side (inertia,
 /// initial stress, gravity, point loads, fixed points) and mass matrix M (each only if
-/// its effect is on).
+/// its effect is on). Inertia is 2/dt^2 M and 2/dt M V under the constant-acceleration
+/// rule, 4/dt^2 M and M (4/dt V + A) under the average-acceleration one (see
+/// [`StepRule`]).
 pub(crate) fn block_terms(
     model: &Model,
     eff: Effects,
+    rule: StepRule,
     b: &BlockState,
     i: usize,
     dt: f64,
@@ -300,17 +304,26 @@ pub(crate) fn block_terms(
     let mass = mass_matrix(&m, mat.density);
     let mut k = [[0.0; 6]; 6];
     let mut f = [0.0; 6];
-    // Inertia (constant acceleration): 2/dt^2 M, and 2/dt M V when dynamic.
-    let c2 = 2.0 / (dt * dt);
+    let average = rule == StepRule::Average;
+    let c2 = if average { 4.0 } else { 2.0 } / (dt * dt);
     for a in 0..6 {
         for bb in 0..6 {
             k[a][bb] += c2 * mass[a][bb];
         }
     }
     if eff.inertia {
-        let c1 = 2.0 / dt;
-        for a in 0..6 {
-            f[a] += c1 * (0..6).map(|bb| mass[a][bb] * b.velocity[bb]).sum::<f64>();
+        if average {
+            let c1 = 4.0 / dt;
+            for a in 0..6 {
+                f[a] += (0..6)
+                    .map(|bb| mass[a][bb] * (c1 * b.velocity[bb] + b.acceleration[bb]))
+                    .sum::<f64>();
+            }
+        } else {
+            let c1 = 2.0 / dt;
+            for a in 0..6 {
+                f[a] += c1 * (0..6).map(|bb| mass[a][bb] * b.velocity[bb]).sum::<f64>();
+            }
         }
     }
     if eff.elasticity {
@@ -348,6 +361,35 @@ pub(crate) fn block_terms(
         }
     }
     (k, f, mass)
+}
+
+/// The rule a step integrates by: Shi's constant acceleration (D = V dt + a dt^2 / 2,
+/// V' = V + a dt, a from the end of the step's forces), or Newmark's average
+/// acceleration (D = V dt + (A + a) dt^2 / 4, V' = V + (A + a) dt / 2, A the last
+/// step's). Both give V' = 2 D / dt - V.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum StepRule {
+    /// Shi's constant acceleration (and every static step).
+    Constant,
+    /// Newmark's average acceleration.
+    Average,
+}
+
+impl Simulation {
+    /// The rule of the next step: the average-acceleration rule when the scene asks for
+    /// it, the analysis is dynamic and the blocks' accelerations are known (from a step
+    /// taken); else the constant-acceleration rule.
+    pub(crate) fn step_rule(&self) -> StepRule {
+        let p = &self.model.params;
+        if p.integration == Integration::AverageAcceleration
+            && p.mode == Mode::Dynamic
+            && self.state.accelerations_known
+        {
+            StepRule::Average
+        } else {
+            StepRule::Constant
+        }
+    }
 }
 
 /// Adds the stiffness of the spring p q^2 / 2 of `row` to the matrix (fixed blocks

@@ -26,7 +26,7 @@ pub const CHECKPOINT_MAGIC: [u8; 8] = *b"DDA-CKPT";
 /// contacts' pairs carry the cover detector's deep flag. Version 3: the physics guard's
 /// energy balance and recorded violations; the engine's state as one record and the
 /// running program's record apart from it. Version 4: what has come of each bolt.
-pub const CHECKPOINT_VERSION: u32 = 4;
+pub const CHECKPOINT_VERSION: u32 = 5;
 
 /// Length of the header before the payload.
 const HEADER_LEN: usize = 24;

@@ -3,7 +3,9 @@
 //! (no overlaps; in a static analysis, every free block supported).
 
 use crate::limits::{self, Range};
-use crate::scene::{Analysis, BlockSpec, Invalid, Joint, Material, Mode, Plane, Scene, invalid};
+use crate::scene::{
+    Analysis, BlockSpec, Integration, Invalid, Joint, Material, Mode, Plane, Scene, invalid,
+};
 use crate::seismic::{GroundMotion, check_samples};
 use dda_geom::{ConvexPolygon, DVec2, PolygonError, PolygonOptions, separation};
 use std::borrow::Cow;
@@ -259,6 +261,15 @@ impl Scene {
         let mut warnings = unit_slips(self);
         warnings.append(&mut unused);
         warnings.extend(drift.take());
+        if params.integration == Integration::AverageAcceleration && params.impact_steps.is_none() {
+            warnings.push(invalid(
+                "analysis.integration",
+                "the average-acceleration rule without impact_steps: a contact that opens \
+                 within a step keeps its push for half of it, which can create energy when \
+                 impacts are not resolved in time (the physics guard then stops the run); \
+                 give impact_steps (10 is a good start)",
+            ));
+        }
         if params.d_tol < 2.0 * params.d_max {
             warnings.push(invalid(
                 "analysis.contact_tolerance",
@@ -663,6 +674,10 @@ pub struct Params {
     pub max_oci: u32,
     /// SVG frames over the run.
     pub frames: u32,
+    /// Fewest steps an impact spans (`analysis.impact_steps`), if given.
+    pub impact_steps: Option<u32>,
+    /// The time-integration rule of a dynamic step.
+    pub integration: Integration,
 }
 
 impl Analysis {
@@ -725,6 +740,19 @@ impl Analysis {
         if self.frames > 100_000 {
             return Err(invalid(k("frames"), "must be at most 100000"));
         }
+        if let Some(n) = self.impact_steps
+            && !(1..=1000).contains(&n)
+        {
+            return Err(invalid(
+                k("impact_steps"),
+                format!("must be between 1 and 1000, got {n}"),
+            ));
+        }
+        let integration = self.integration.unwrap_or(if self.impact_steps.is_some() {
+            Integration::AverageAcceleration
+        } else {
+            Integration::ConstantAcceleration
+        });
         Ok(Params {
             mode: self.mode,
             duration,
@@ -741,6 +769,8 @@ impl Analysis {
             plane: self.plane,
             max_oci: self.max_oci,
             frames: self.frames,
+            impact_steps: self.impact_steps,
+            integration,
         })
     }
 }

@@ -247,6 +247,28 @@ pub struct Analysis {
     /// Number of SVG frames over the run (plus the initial one); 0 for none.
     #[serde(default = "default_frames")]
     pub frames: u32,
+    /// Fewest steps an impact spans: while blocks strike or rebound, the step is held to
+    /// 1/N of the contact's duration pi sqrt(m / p); absent, impacts are not resolved.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub impact_steps: Option<u32>,
+    /// The time-integration rule; default `constant-acceleration` (Shi's), or
+    /// `average-acceleration` when `impact_steps` is given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub integration: Option<Integration>,
+}
+
+/// How a dynamic step integrates the motion (docs/method.md section 12).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Integration {
+    /// Shi's: D = V dt + a dt^2 / 2 and V' = V + a dt with a from the forces at the
+    /// step's end (Newmark's gamma = 1, beta = 1/2): unconditionally stable, and
+    /// dissipative at large dt / T.
+    #[default]
+    ConstantAcceleration,
+    /// Newmark's average acceleration (gamma = 1/2, beta = 1/4): D = V dt + (a + a')
+    /// dt^2 / 4, V' = V + (a + a') dt / 2; conserves the energy of linear springs.
+    AverageAcceleration,
 }
 
 fn default_max_rotation_deg() -> f64 {

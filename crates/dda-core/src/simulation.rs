@@ -187,6 +187,7 @@ impl Simulation {
                 rotation: 0.0,
                 loads: b.loads.clone(),
                 fixed_points: b.fixed_points.iter().map(|&q| (q, q)).collect(),
+                acceleration: [0.0; 6],
             })
             .collect();
         let shapes = blocks.iter().map(|b| BlockShape::new(&b.polygon)).collect();
@@ -243,6 +244,7 @@ impl Simulation {
                 },
                 violations: Vec::new(),
                 bolts: vec![Default::default(); n_bolts],
+                accelerations_known: false,
             },
             scratch: Scratch {
                 shapes,
@@ -456,7 +458,11 @@ impl Simulation {
         let remaining = target - self.state.t;
         // The step respects the motion it starts with: no block's current velocity may
         // carry a vertex beyond d_max, or turn it beyond theta_max, within it.
-        let planned = self.state.dt.min(self.velocity_room());
+        let planned = self
+            .state
+            .dt
+            .min(self.velocity_room())
+            .min(self.impact_room());
         // Land on `duration`; a remainder within 1e-6 of a step is taken with it rather
         // than left as a sliver step.
         let landing = planned * (1.0 + 1e-6) >= remaining;

@@ -86,6 +86,10 @@ pub struct BlockState {
     pub loads: Vec<(DVec2, DVec2)>,
     /// Fixed points: current material point, its fixed place.
     pub fixed_points: Vec<(DVec2, DVec2)>,
+    /// Acceleration at the end of the last step (rates of the velocity's components),
+    /// which the average-acceleration rule carries into the next step; zero under the
+    /// constant-acceleration rule, which does not need it.
+    pub acceleration: Vec6,
 }
 
 /// The state of a run at the end of a step: everything the next step reads that is not
@@ -111,6 +115,10 @@ pub struct RunState {
     pub violations: Vec<Violation>,
     /// What has come of each bolt.
     pub bolts: Vec<crate::bolts::BoltState>,
+    /// Whether the blocks' accelerations are those of a step taken (the
+    /// average-acceleration rule takes its first step by the constant-acceleration one,
+    /// which needs none).
+    pub accelerations_known: bool,
 }
 
 /// Everything a run needs to go on from the end of a step exactly as it would have

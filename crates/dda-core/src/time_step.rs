@@ -4,6 +4,7 @@
 
 use crate::kinematics::point_displacement;
 use crate::simulation::Simulation;
+use dda_geom::DVec2;
 
 /// Most OCI iterations of an easy step (after which dt may grow): two thirds of the bound
 /// `max_oci`, rounded up (4 of 6). Our choice; Shi's formulation and the paper fix only the
@@ -81,6 +82,65 @@ impl Simulation {
             }
         }
         (p.d_max / speed).min(p.theta_max / spin)
+    }
+
+    /// The largest step `analysis.impact_steps` = N allows: for every pair of blocks in
+    /// impact, a 1/N of its contact's duration pi sqrt(m / (n p)) (m the reduced mass of
+    /// the two blocks, or the free block's against a fixed one; n its contacts in
+    /// impact; p the normal penalty); infinite without the key or without impacts. A
+    /// contact is in impact when its vertex approaches the edge, or leaves it while
+    /// the contact is closed, faster than 2 g sqrt(m / p): twice the speed at which a
+    /// contact set down unloaded rings under the weight it carries, so that resting
+    /// contacts do not hold the step down (docs/method.md section 12).
+    pub(crate) fn impact_room(&self) -> f64 {
+        let p = &self.model.params;
+        let Some(n_steps) = p.impact_steps else {
+            return f64::INFINITY;
+        };
+        let g = p.gravity.map_or(0.0, |g| g.length());
+        let mass = |i: usize| -> Option<f64> {
+            self.free[i]?;
+            let mat = self.model.materials[self.material[i] as usize];
+            Some(mat.density * self.state.blocks[i].polygon.moments().area)
+        };
+        let mut room = f64::INFINITY;
+        for pc in &self.state.contacts.pairs {
+            let (a, b) = (pc.pair.a as usize, pc.pair.b as usize);
+            let m = match (mass(a), mass(b)) {
+                (Some(ma), Some(mb)) => ma * mb / (ma + mb),
+                (Some(m), None) | (None, Some(m)) => m,
+                (None, None) => continue,
+            };
+            let settle = 2.0 * g * (m / p.normal_penalty).sqrt();
+            let mut in_impact = 0u32;
+            for c in &self.state.contacts.contacts[pc.start as usize..pc.end as usize] {
+                if !c.active {
+                    continue;
+                }
+                let k = c.key;
+                let (vs, es) = (
+                    &self.scratch.shapes[k.vertex_block as usize],
+                    &self.scratch.shapes[k.edge_block as usize],
+                );
+                let at = vs.vertices[k.vertex as usize];
+                let t = es.tangents[k.edge as usize];
+                let normal = DVec2::new(t.y, -t.x);
+                let speed = |i: usize, shape: &dda_contact::BlockShape| {
+                    point_displacement(at, shape.centroid, &self.state.blocks[i].velocity)
+                };
+                let v_n = (speed(k.vertex_block as usize, vs) - speed(k.edge_block as usize, es))
+                    .dot(normal);
+                if v_n < -settle || (c.state.is_closed() && v_n > settle) {
+                    in_impact += 1;
+                }
+            }
+            if in_impact > 0 {
+                let duration =
+                    std::f64::consts::PI * (m / (f64::from(in_impact) * p.normal_penalty)).sqrt();
+                room = room.min(duration / f64::from(n_steps));
+            }
+        }
+        room
     }
 
     /// Largest vertex displacement (first order) and largest |rotation| of the trial

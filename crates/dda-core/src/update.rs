@@ -2,10 +2,11 @@
 //! solved motion with the rotation exact, stresses accumulate, velocities follow the
 //! constant-acceleration scheme.
 
+use crate::assembly::StepRule;
 use crate::diagnosis::SimError;
 use crate::guard::add_kinetic;
 use crate::kinematics::{elasticity, mass_matrix};
-use crate::scene::Mode;
+use crate::scene::{Integration, Mode};
 use crate::simulation::Simulation;
 use crate::state::StepRecord;
 use dda_geom::{check_displacement, displace_point};
@@ -38,6 +39,10 @@ impl Simulation {
             }
         }
         let dynamic = model.params.mode == Mode::Dynamic;
+        // The average-acceleration rule carries each block's acceleration: that of the
+        // step just taken, by the rule it was taken by.
+        let carry = dynamic && model.params.integration == Integration::AverageAcceleration;
+        let average = self.step_rule() == StepRule::Average;
         let ground_velocity = self.model.ground.as_ref().map(|g| g.at(t + dt).1);
         for i in 0..self.state.blocks.len() {
             if self.free[i].is_none() {
@@ -59,6 +64,14 @@ impl Simulation {
             // Cannot fail: every motion was checked above.
             b.polygon.displace(c, &d).map_err(|_| inverted(i))?;
             for v in 0..6 {
+                if carry {
+                    let change = d[v] - b.velocity[v] * dt;
+                    b.acceleration[v] = if average {
+                        4.0 * change / (dt * dt) - b.acceleration[v]
+                    } else {
+                        2.0 * change / (dt * dt)
+                    };
+                }
                 b.velocity[v] = if dynamic {
                     2.0 * d[v] / dt - b.velocity[v]
                 } else {
@@ -82,6 +95,7 @@ impl Simulation {
             self.scratch.shapes[i].set(&b.polygon);
         }
         self.state.t += dt;
+        self.state.accelerations_known |= carry;
         Ok(())
     }
 

@@ -27,6 +27,8 @@ fn analysis(duration: f64, dt: f64, d_max: f64, penalty: f64) -> Analysis {
         plane: Plane::Stress,
         max_oci: 6,
         frames: 0,
+        impact_steps: None,
+        integration: None,
     }
 }
 
