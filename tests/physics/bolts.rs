@@ -78,10 +78,12 @@ fn a_hanging_block_stretches_its_bolt_by_its_weight_over_the_stiffness() {
 
 /// Dynamic, the bolt's strength half the weight and its stiffness (1e11 N/m) far above
 /// the block's inertia over a step (2 m / dt^2 = 1.3e9 N/m at dt = 2 ms), so that the
-/// first step loads it with nearly the whole weight: it breaks in that step, and the
-/// block falls freely from then on: in T = 0.5 s its measured foot drops g T^2 / 2 =
-/// 1.226 m and moves at g T, less what the first step held back, at most g dt T and
-/// g dt.
+/// first step loads it with nearly the whole weight (settled before the run, with all
+/// of it): it breaks in that step, and the block falls freely from then on: in
+/// T = 0.5 s its measured foot drops g T^2 / 2 = 1.226 m and moves at g T, less what
+/// the first step held back, at most g dt T and g dt (settled, the bolt holds the block
+/// through the first step exactly, and the stretch it settled into relaxes as the
+/// block's strain rings: the foot's speed within 1e-6 of that).
 #[test]
 fn a_bolt_weaker_than_the_weight_breaks_and_the_block_falls() {
     let dt = 0.002;
@@ -106,7 +108,7 @@ fn a_bolt_weaker_than_the_weight_breaks_and_the_block_falls() {
     );
     let v = sim.material_velocity(foot.block, foot.at);
     assert!(
-        -v.y <= g * big_t * (1.0 + 1e-9) && -v.y >= g * big_t - g * dt,
+        -v.y <= g * big_t * (1.0 + 1e-9) && -v.y >= (g * big_t - g * dt) * (1.0 - 1e-6),
         "velocity {v:?}"
     );
     assert!(v.x.abs() < 1e-9, "{v:?}");

@@ -12,3 +12,4 @@ mod impacts;
 mod regions;
 mod resume;
 mod seismic;
+mod stacks;

@@ -40,6 +40,7 @@ pub fn analytic_analysis(
         frames: 0,
         impact_steps: None,
         integration: None,
+        settle: Some(false),
     }
 }
 

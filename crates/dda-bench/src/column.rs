@@ -119,6 +119,7 @@ pub fn paper_analysis(
         frames: 10,
         impact_steps: None,
         integration: None,
+        settle: Some(false),
     }
 }
 

@@ -157,6 +157,7 @@ impl Masonry {
                 frames: 2,
                 impact_steps: None,
                 integration: None,
+                settle: Some(false),
             },
             materials: rock(2600.0, 1e9, 0.25),
             joints: BTreeMap::from([(

@@ -57,6 +57,15 @@ pub enum SimError {
         /// Ids of the blocks involved.
         blocks: Vec<String>,
     },
+    /// Settling the blocks before a dynamic run failed (`analysis.settle`).
+    #[error(
+        "settling the blocks at t = 0 failed: {reason} (set analysis.settle = false to start \
+         from the blocks as written)"
+    )]
+    Settle {
+        /// Why the settling step failed.
+        reason: String,
+    },
 }
 
 /// What a failed run was doing when it stopped: which blocks and contacts were involved

@@ -26,6 +26,7 @@ mod pattern;
 mod regions;
 pub mod scene;
 pub mod seismic;
+mod settle;
 pub mod simulation;
 pub mod solver;
 pub mod springs;

@@ -578,6 +578,28 @@ fn check_static_support(
     d_tol: f64,
     tied: &[(usize, usize)],
 ) -> Result<(), Invalid> {
+    let supported = supported_blocks(blocks, d_tol, tied);
+    match supported.iter().position(|s| !s) {
+        Some(i) => Err(invalid(
+            format!("blocks[{i}]"),
+            format!(
+                "static analysis: block `{}` rests on no fixed block or fixed point \
+                 (directly or through touching blocks), so it has no equilibrium; fix it, \
+                 give it fixed points, or use mode = \"dynamic\"",
+                blocks[i].id
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// Which blocks rest, through blocks within `d_tol` of each other or tied by bolts
+/// (`tied`), on a fixed block or a fixed point.
+pub(crate) fn supported_blocks(
+    blocks: &[ModelBlock],
+    d_tol: f64,
+    tied: &[(usize, usize)],
+) -> Vec<bool> {
     let boxes: Vec<_> = blocks.iter().map(|b| b.polygon.aabb()).collect();
     let mut pairs = Vec::new();
     dda_contact::neighbour_pairs(&boxes, d_tol, &mut pairs);
@@ -610,18 +632,7 @@ fn check_static_support(
             }
         }
     }
-    match supported.iter().position(|s| !s) {
-        Some(i) => Err(invalid(
-            format!("blocks[{i}]"),
-            format!(
-                "static analysis: block `{}` rests on no fixed block or fixed point \
-                 (directly or through touching blocks), so it has no equilibrium; fix it, \
-                 give it fixed points, or use mode = \"dynamic\"",
-                blocks[i].id
-            ),
-        )),
-        None => Ok(()),
-    }
+    supported
 }
 
 /// `v` if it lies in `range` (see [`crate::limits`]), else the error naming `key`.
@@ -678,6 +689,8 @@ pub struct Params {
     pub impact_steps: Option<u32>,
     /// The time-integration rule of a dynamic step.
     pub integration: Integration,
+    /// Whether a dynamic analysis settles before it starts (`analysis.settle`).
+    pub settle: bool,
 }
 
 impl Analysis {
@@ -771,6 +784,7 @@ impl Analysis {
             frames: self.frames,
             impact_steps: self.impact_steps,
             integration,
+            settle: self.mode == Mode::Dynamic && self.settle.unwrap_or(true),
         })
     }
 }

@@ -255,6 +255,11 @@ pub struct Analysis {
     /// `average-acceleration` when `impact_steps` is given.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub integration: Option<Integration>,
+    /// Settle a dynamic analysis before it starts: the blocks resting on each other
+    /// load their contacts under gravity and loads, joints held, so that the run starts
+    /// from loaded contacts rather than unloaded ones that ring; default true.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub settle: Option<bool>,
 }
 
 /// How a dynamic step integrates the motion (docs/method.md section 12).

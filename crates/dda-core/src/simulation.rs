@@ -245,6 +245,7 @@ impl Simulation {
                 violations: Vec::new(),
                 bolts: vec![Default::default(); n_bolts],
                 accelerations_known: false,
+                settled: false,
             },
             scratch: Scratch {
                 shapes,
@@ -420,6 +421,12 @@ impl Simulation {
     pub fn step(&mut self) -> Result<StepRecord, SimError> {
         let mut last_dt = self.state.dt;
         let mut worst = None;
+        if !self.state.settled
+            && let Err(e) = self.settle()
+        {
+            self.diagnose(&e, last_dt, None);
+            return Err(e);
+        }
         let result = self.try_step(&mut last_dt, &mut worst);
         match &result {
             Err(e) => self.diagnose(e, last_dt, worst),

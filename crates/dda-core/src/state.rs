@@ -119,6 +119,9 @@ pub struct RunState {
     /// average-acceleration rule takes its first step by the constant-acceleration one,
     /// which needs none).
     pub accelerations_known: bool,
+    /// Whether the blocks have been settled before the run (`analysis.settle`), or the
+    /// run has gone past where they would be.
+    pub settled: bool,
 }
 
 /// Everything a run needs to go on from the end of a step exactly as it would have

@@ -29,6 +29,7 @@ fn analysis(duration: f64, dt: f64, d_max: f64, penalty: f64) -> Analysis {
         frames: 0,
         impact_steps: None,
         integration: None,
+        settle: Some(false),
     }
 }
 
