@@ -360,8 +360,8 @@ fn reopen(path: &Path, len: u64) -> Result<BufWriter<File>, Failure> {
     Ok(BufWriter::new(f))
 }
 
-/// Most coordinates the animation holds over all its frames; fewer frames for larger
-/// models keep report.html to a few megabytes.
+/// Most numbers (coordinates, speeds, stresses) the animation holds over all its
+/// frames; fewer frames for larger models keep report.html to a few megabytes.
 const ANIMATION_BUDGET: usize = 500_000;
 
 impl Job {
@@ -374,8 +374,12 @@ impl Job {
         frames: BufWriter<File>,
         quiet: bool,
     ) -> Self {
+        // The numbers a frame holds: two coordinates a vertex, a speed a block, and three
+        // stresses a block when the blocks are elastic.
         let vertices: usize = sim.blocks().iter().map(|b| b.polygon.len()).sum();
-        let animation_frames = (ANIMATION_BUDGET / (2 * vertices).max(1)).clamp(20, 200) as u64;
+        let per_block = if sim.effects().elasticity { 4 } else { 1 };
+        let per_frame = 2 * vertices + per_block * sim.blocks().len();
+        let animation_frames = (ANIMATION_BUDGET / per_frame.max(1)).clamp(20, 200) as u64;
         let resolution = frame_resolution(&frame_view(sim.model()));
         Job {
             scene,

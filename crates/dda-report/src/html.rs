@@ -358,6 +358,7 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
         }
     }
     page.push_str("</table>\n");
+    materials_and_joints(&mut page, r.scene);
 
     // Data and script.
     let data = serde_json::json!({
@@ -415,6 +416,50 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
         "<script id=\"data\" type=\"application/json\">{data}</script>\n<script>\n{SCRIPT}</script>\n</body></html>\n"
     );
     page
+}
+
+/// The tables of the scene's materials and joints, with their units.
+fn materials_and_joints(page: &mut String, scene: &Scene) {
+    let opt = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:e}"));
+    page.push_str(
+        "<h2>Materials and joints</h2>\n<table>\n<tr><th>material</th><th>density (kg/m^3)</th>\
+         <th>Young's modulus (Pa)</th><th>Poisson's ratio</th></tr>\n",
+    );
+    for (name, m) in &scene.materials {
+        let _ = writeln!(
+            page,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            escape(name),
+            m.density,
+            opt(m.young),
+            m.poisson.map_or("-".to_string(), |x| x.to_string())
+        );
+    }
+    page.push_str(
+        "</table>\n<table>\n<tr><th>joint</th><th>friction (degrees)</th>\
+         <th>cohesion (Pa)</th><th>tensile strength (Pa)</th><th>between</th></tr>\n",
+    );
+    for (name, j) in &scene.joints {
+        let between = j
+            .between
+            .as_ref()
+            .map_or("(where named)".to_string(), |[a, b]| format!("{a} / {b}"));
+        let between = if name == "default" && j.between.is_none() {
+            "every other pair".to_string()
+        } else {
+            between
+        };
+        let _ = writeln!(
+            page,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            escape(name),
+            j.friction_deg,
+            j.cohesion,
+            j.tensile_strength,
+            escape(&between)
+        );
+    }
+    page.push_str("</table>\n");
 }
 
 /// Most measured points the report plots (each has two plots); the others are in

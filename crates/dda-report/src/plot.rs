@@ -4,7 +4,9 @@ use super::escape;
 use std::fmt::Write as _;
 
 /// An SVG plot of named series of (x, y) points on linear axes: joined by lines if
-/// `lines`, with a dot at each point if `dots`.
+/// `lines`, with a dot at each point if `dots`. The axes span "nice" ranges (the data's,
+/// the y axis from 0 or below, widened to whole steps of 1, 2 or 5 times a power of ten)
+/// with a labelled tick and a grid line at every step; labels keep inside the picture.
 pub fn plot(
     title: &str,
     xlabel: &str,
@@ -13,8 +15,14 @@ pub fn plot(
     lines: bool,
     dots: bool,
 ) -> String {
-    let (w, h, m) = (640.0, 400.0, 60.0);
-    let pts = series.iter().flat_map(|(_, p)| p.iter());
+    // Picture size, and the margins: left (tick labels and the y label), right, top
+    // (title), bottom (tick labels and the x label).
+    let (w, h) = (640.0, 400.0);
+    let (ml, mr, mt, mb) = (78.0, 20.0, 32.0, 50.0);
+    let pts = series
+        .iter()
+        .flat_map(|(_, p)| p.iter())
+        .filter(|p| p.0.is_finite() && p.1.is_finite());
     let (mut x0, mut x1, mut y0, mut y1) =
         (f64::INFINITY, f64::NEG_INFINITY, 0.0f64, f64::NEG_INFINITY);
     for &(x, y) in pts {
@@ -23,15 +31,13 @@ pub fn plot(
         y0 = y0.min(y);
         y1 = y1.max(y);
     }
-    // Empty or flat ranges (or NaN) get a unit span.
-    if x1.partial_cmp(&x0) != Some(std::cmp::Ordering::Greater) {
-        x1 = x0 + 1.0;
+    if !x0.is_finite() {
+        (x0, x1) = (0.0, 1.0);
     }
-    if y1.partial_cmp(&y0) != Some(std::cmp::Ordering::Greater) {
-        y1 = y0 + 1.0;
-    }
-    let sx = |x: f64| m + (x - x0) / (x1 - x0) * (w - 2.0 * m);
-    let sy = |y: f64| h - m - (y - y0) / (y1 - y0) * (h - 2.0 * m);
+    let (xt, yt) = (Ticks::new(x0, x1), Ticks::new(y0, y1.max(y0)));
+    let (x0, x1, y0, y1) = (xt.lo, xt.hi, yt.lo, yt.hi);
+    let sx = |x: f64| ml + (x - x0) / (x1 - x0) * (w - ml - mr);
+    let sy = |y: f64| h - mb - (y - y0) / (y1 - y0) * (h - mt - mb);
     let colours = [
         "#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b",
     ];
@@ -39,34 +45,46 @@ pub fn plot(
         r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="sans-serif" font-size="12">
 <rect width="{w}" height="{h}" fill="white"/>
 <text x="{}" y="20" text-anchor="middle" font-size="14">{}</text>
-<line x1="{m}" y1="{}" x2="{}" y2="{}" stroke="black"/><line x1="{m}" y1="{m}" x2="{m}" y2="{}" stroke="black"/>
 <text x="{}" y="{}" text-anchor="middle">{}</text>
-<text x="15" y="{}" transform="rotate(-90 15 {})" text-anchor="middle">{}</text>
-<text x="{m}" y="{}" text-anchor="middle">{}</text><text x="{}" y="{}" text-anchor="middle">{}</text>
-<text x="{}" y="{}" text-anchor="end">{}</text><text x="{}" y="{m}" text-anchor="end">{}</text>
+<text x="14" y="{}" transform="rotate(-90 14 {})" text-anchor="middle">{}</text>
 "#,
         w / 2.0,
         escape(title),
-        h - m,
-        w - m,
-        h - m,
-        h - m,
-        w / 2.0,
-        h - 15.0,
+        ml + (w - ml - mr) / 2.0,
+        h - 12.0,
         escape(xlabel),
-        h / 2.0,
-        h / 2.0,
+        mt + (h - mt - mb) / 2.0,
+        mt + (h - mt - mb) / 2.0,
         escape(ylabel),
-        h - m + 15.0,
-        tick(x0),
-        w - m,
-        h - m + 15.0,
-        tick(x1),
-        m - 5.0,
-        h - m,
-        tick(y0),
-        m - 5.0,
-        tick(y1),
+    );
+    for v in xt.values() {
+        let x = sx(v);
+        let _ = writeln!(
+            s,
+            r##"<line x1="{x:.1}" y1="{mt}" x2="{x:.1}" y2="{}" stroke="#e0e0e0"/><text class="tick" x="{x:.1}" y="{}" text-anchor="middle">{}</text>"##,
+            h - mb,
+            h - mb + 16.0,
+            xt.label(v)
+        );
+    }
+    for v in yt.values() {
+        let y = sy(v);
+        let _ = writeln!(
+            s,
+            r##"<line x1="{ml}" y1="{y:.1}" x2="{}" y2="{y:.1}" stroke="#e0e0e0"/><text class="tick" x="{}" y="{:.1}" text-anchor="end">{}</text>"##,
+            w - mr,
+            ml - 5.0,
+            y + 4.0,
+            yt.label(v)
+        );
+    }
+    let _ = writeln!(
+        s,
+        r#"<line x1="{ml}" y1="{}" x2="{}" y2="{}" stroke="black"/><line x1="{ml}" y1="{mt}" x2="{ml}" y2="{}" stroke="black"/>"#,
+        h - mb,
+        w - mr,
+        h - mb,
+        h - mb
     );
     for (k, (name, p)) in series.iter().enumerate() {
         let c = colours[k % colours.len()];
@@ -89,44 +107,148 @@ pub fn plot(
                 sy(y)
             );
         }
-        let _ = writeln!(
-            s,
-            r#"<text x="{}" y="{}" fill="{c}">{}</text>"#,
-            w - m + 5.0 - 120.0,
-            m + 15.0 * k as f64,
-            escape(name)
-        );
+        if !name.is_empty() {
+            let _ = writeln!(
+                s,
+                r#"<text x="{}" y="{}" fill="{c}" text-anchor="end">{}</text>"#,
+                w - mr - 5.0,
+                mt + 14.0 + 15.0 * k as f64,
+                escape(name)
+            );
+        }
     }
     s.push_str("</svg>\n");
     s
 }
 
-/// An axis end's label: four significant digits, in exponent form outside 1e-3 to 1e5
-/// (so that a millimetre's fraction does not print as 0.000).
-pub fn tick(v: f64) -> String {
-    let a = v.abs();
-    if a == 0.0 {
-        "0".into()
-    } else if (1e-3..1e5).contains(&a) {
-        let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+/// An axis's ticks: from `lo` to `hi` by `step`, all whole multiples of it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ticks {
+    /// The axis's start: the data's smallest value rounded down to a step.
+    pub lo: f64,
+    /// The axis's end: the data's largest rounded up to a step.
+    pub hi: f64,
+    /// 1, 2 or 5 times a power of ten: four to ten steps over the range.
+    pub step: f64,
+}
+
+impl Ticks {
+    /// The ticks of a range from `lo` to `hi` (a flat or empty range gets a unit span).
+    pub fn new(lo: f64, hi: f64) -> Self {
+        let (lo, hi) = if hi > lo && (hi - lo).is_finite() {
+            (lo, hi)
+        } else if lo.is_finite() {
+            (lo, lo + 1.0)
+        } else {
+            (0.0, 1.0)
+        };
+        let raw = (hi - lo) / 5.0;
+        let mag = 10f64.powf(raw.log10().floor());
+        let step = [1.0, 2.0, 5.0, 10.0]
+            .iter()
+            .map(|f| f * mag)
+            .find(|&s| s >= raw)
+            .unwrap_or(10.0 * mag);
+        Ticks {
+            lo: (lo / step).floor() * step,
+            hi: (hi / step).ceil() * step,
+            step,
+        }
+    }
+
+    /// The tick values, from `lo` to `hi`.
+    pub fn values(&self) -> impl Iterator<Item = f64> + '_ {
+        let n = ((self.hi - self.lo) / self.step).round() as i64;
+        (0..=n).map(move |k| {
+            let v = self.lo + k as f64 * self.step;
+            // Whole multiples of the step, without the rounding of the sum.
+            (v / self.step).round() * self.step
+        })
+    }
+
+    /// The label of tick `v`: as many decimals as the step needs, or exponent form
+    /// outside 1e-3 to 1e5.
+    pub fn label(&self, v: f64) -> String {
+        let a = self.step.abs().max(v.abs());
+        if v == 0.0 {
+            return "0".into();
+        }
+        if !(1e-3..1e5).contains(&a) || self.step < 1e-4 {
+            return format!("{v:.1e}");
+        }
+        let decimals = (-self.step.log10().floor()).max(0.0) as usize;
         format!("{v:.decimals$}")
-    } else {
-        format!("{v:.3e}")
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::tick;
+    use super::{Ticks, plot};
 
-    /// Four significant digits whatever the scale, never a bare 0.000 for a non-zero end.
+    /// Ticks are whole steps of 1, 2 or 5 times a power of ten, four to ten of them,
+    /// covering the range, labelled with the decimals their step needs.
     #[test]
-    fn ticks_keep_four_significant_digits() {
-        assert_eq!(tick(0.0), "0");
-        assert_eq!(tick(1.465), "1.465");
-        assert_eq!(tick(-5933.08), "-5933");
-        assert_eq!(tick(0.0021), "0.002100");
-        assert_eq!(tick(-0.000123), "-1.230e-4");
-        assert_eq!(tick(2.5e7), "2.500e7");
+    fn ticks_are_nice_and_cover_the_range() {
+        for (lo, hi) in [
+            (0.0, 15930492.342),
+            (0.0, 1.465),
+            (-0.0021, 0.0007),
+            (0.002, 0.1),
+            (3.0, 3.0),
+        ] {
+            let t = Ticks::new(lo, hi);
+            let v: Vec<f64> = t.values().collect();
+            assert!(t.lo <= lo && t.hi >= hi.max(lo), "{lo} {hi}: {t:?}");
+            assert!((4..=11).contains(&v.len()), "{lo} {hi}: {v:?}");
+            let m = t.step / 10f64.powf(t.step.log10().floor());
+            assert!(
+                [1.0, 2.0, 5.0].iter().any(|f| (m - f).abs() < 1e-9),
+                "{t:?}"
+            );
+        }
+        let t = Ticks::new(0.0, 1.465);
+        assert_eq!((t.step, t.hi), (0.5, 1.5));
+        assert_eq!(t.label(1.5), "1.5");
+        let t = Ticks::new(0.0, 0.7);
+        assert_eq!(t.step, 0.2);
+        assert_eq!(t.label(0.6000000000000001), "0.6");
+        let big = Ticks::new(0.0, 15930492.342);
+        assert_eq!(big.label(4e6), "4.0e6");
+    }
+
+    /// Every tick label of a plot is a whole number of the picture's text and lies within
+    /// it (an anchor at least the label's estimated half width, 7 px a character, from
+    /// the edges).
+    #[test]
+    fn tick_labels_stay_inside_the_picture() {
+        let svg = plot(
+            "t",
+            "x",
+            "y",
+            &[("a".into(), vec![(0.0, 0.0), (0.1, 15930492.342)])],
+            true,
+            false,
+        );
+        for line in svg.lines().filter(|l| l.contains("class=\"tick\"")) {
+            let text = line.rsplit('>').nth(1).unwrap().trim_end_matches("</text");
+            let x: f64 = line
+                .split("<text class=\"tick\" x=\"")
+                .nth(1)
+                .unwrap()
+                .split('"')
+                .next()
+                .unwrap()
+                .parse()
+                .unwrap();
+            let width = 7.0 * text.len() as f64;
+            if line.contains("text-anchor=\"end\"") {
+                assert!(x - width >= 0.0, "{text} at {x}");
+            } else {
+                assert!(
+                    x - width / 2.0 >= 0.0 && x + width / 2.0 <= 640.0,
+                    "{text} at {x}"
+                );
+            }
+        }
     }
 }
