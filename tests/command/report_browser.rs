@@ -307,6 +307,58 @@ fn report_renders_and_animates_in_headless_chromium() {
         assert_eq!(page.eval("window.ddaReport.frame()"), json!(last));
         assert!(page.eval(INKED).as_u64().unwrap() > 1000);
 
+        // The view: a scale bar is drawn; the wheel zooms and a drag pans (the view
+        // changes); hovering the sliding block names it; Fit all restores the view.
+        let scale = page.eval("document.getElementById('scale').textContent");
+        assert!(scale.as_str().unwrap().ends_with(" m"), "{scale}");
+        let fitted = page.eval("window.ddaReport.view()");
+        page.eval(
+            "(() => { const c = document.getElementById('view'); const r = c.getBoundingClientRect(); \
+             c.dispatchEvent(new WheelEvent('wheel', { deltaY: -300, clientX: r.left + r.width / 2, \
+             clientY: r.top + r.height / 2, cancelable: true })); })()",
+        );
+        let zoomed = page.eval("window.ddaReport.view()");
+        assert!(
+            zoomed[2].as_f64().unwrap() > 1.5 * fitted[2].as_f64().unwrap(),
+            "{fitted} {zoomed}"
+        );
+        page.eval(
+            "(() => { const c = document.getElementById('view'); \
+             c.dispatchEvent(new MouseEvent('mousedown', { clientX: 100, clientY: 100 })); \
+             c.dispatchEvent(new MouseEvent('mousemove', { clientX: 160, clientY: 130 })); \
+             window.dispatchEvent(new MouseEvent('mouseup', {})); })()",
+        );
+        let panned = page.eval("window.ddaReport.view()");
+        assert!(
+            panned[0] != zoomed[0] && panned[1] != zoomed[1],
+            "{zoomed} {panned}"
+        );
+        page.eval("document.getElementById('fit').click()");
+        assert_eq!(page.eval("window.ddaReport.view()"), fitted);
+        // The slider (block 1) at the last frame: hover its centroid.
+        let hover = page.eval(
+            "(() => { const f = JSON.parse(document.getElementById('data').textContent).frames; \
+             const b = f[f.length - 1].blocks[1]; let x = 0, y = 0; \
+             for (let j = 0; j < b.length; j += 2) { x += b[j]; y += b[j + 1]; } \
+             const n = b.length / 2; const [cx, cy] = window.ddaReport.client(x / n, y / n); \
+             document.getElementById('view').dispatchEvent(new MouseEvent('mousemove', { clientX: cx, clientY: cy })); \
+             return document.getElementById('hover').textContent; })()",
+        );
+        assert!(
+            hover.as_str().unwrap().starts_with("block slider"),
+            "{name}: {hover}"
+        );
+        // Every tick label of the plots lies inside its picture.
+        let outside = page.eval(
+            "(() => { let bad = []; for (const svg of document.querySelectorAll('.plots svg')) { \
+             const s = svg.getBoundingClientRect(); \
+             for (const t of svg.querySelectorAll('text')) { const b = t.getBoundingClientRect(); \
+             if (b.left < s.left - 0.5 || b.top < s.top - 0.5 || b.right > s.right + 0.5 \
+             || b.bottom > s.bottom + 0.5) bad.push(t.textContent); } } \
+             return bad; })()",
+        );
+        assert_eq!(outside, json!([]), "{name}: labels outside their plot");
+
         // Colour by stress (the blocks are elastic): the legend says so, the canvas
         // is drawn anew.
         page.eval(

@@ -189,6 +189,8 @@ table {{ border-collapse: collapse; margin-bottom: 1em; }}
 td, th {{ border: 1px solid #ccc; padding: 2px 8px; text-align: left; }}
 .failed {{ color: #b00020; }}
 #controls {{ display: flex; gap: 1em; align-items: center; margin: 0.5em 0; }}
+#viewing {{ margin: 0.3em 0; font-size: 90%; }}
+#hover {{ font-weight: bold; }}
 #slider {{ flex: 1; }}
 canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
 .plots {{ display: flex; flex-wrap: wrap; gap: 0.5em; }}
@@ -256,6 +258,7 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
 <div id="controls"><button id="play" type="button">Play</button>
 <input id="slider" type="range" min="0" max="{}" value="0" step="1" aria-label="time">
 <span id="time"></span></div>
+<div id="viewing"><button id="fit" type="button">Fit all</button> <label><input id="follow" type="checkbox"> Follow the moving blocks</label> <span>Wheel: zoom; drag: pan; hover a block for its id. Scale bar: <span id="scale"></span>.</span> <span id="hover"></span></div>
 <canvas id="view" width="{cw:.0}" height="{ch:.0}"></canvas>
 <p>{colour_by}Blocks coloured by <span id="legend"></span>; fixed blocks grey; red dots: active closed contacts; dashed: the rock an excavation removes; green lines: bolts (until they break); black squares: measured points.</p>"#,
         r.frames.len().saturating_sub(1),
@@ -583,11 +586,110 @@ const SCRIPT: &str = r##""use strict";
   const slider = document.getElementById("slider");
   const play = document.getElementById("play");
   const label = document.getElementById("time");
-  const [x0, y0, x1, y1] = data.view;
-  const sx = canvas.width / (x1 - x0), sy = canvas.height / (y1 - y0);
-  const scale = Math.min(sx, sy);
-  const px = (x) => (x - x0) * scale;
-  const py = (y) => canvas.height - (y - y0) * scale;
+  // The view: the world point at the canvas's lower-left corner and pixels a metre.
+  // The axes take AXES pixels at the left and the bottom.
+  const AXES = 40;
+  let view = { x0: 0, y0: 0, scale: 1 };
+  function fitTo(bx0, by0, bx1, by1) {
+    const w = canvas.width - AXES - 10, h = canvas.height - AXES - 10;
+    const dx = Math.max(bx1 - bx0, 1e-9), dy = Math.max(by1 - by0, 1e-9);
+    const s = Math.min(w / dx, h / dy);
+    view = {
+      scale: s,
+      x0: bx0 - (w / s - dx) / 2 - AXES / s,
+      y0: by0 - (h / s - dy) / 2 - AXES / s,
+    };
+  }
+  const fitAll = () => fitTo(data.view[0], data.view[1], data.view[2], data.view[3]);
+  fitAll();
+  const px = (x) => (x - view.x0) * view.scale;
+  const py = (y) => canvas.height - (y - view.y0) * view.scale;
+  const wx = (p) => view.x0 + p / view.scale;
+  const wy = (q) => view.y0 + (canvas.height - q) / view.scale;
+  // 1, 2 or 5 times a power of ten, the smallest at least `raw`.
+  function niceStep(raw) {
+    const mag = Math.pow(10, Math.floor(Math.log10(raw)));
+    for (const f of [1, 2, 5, 10]) { if (f * mag >= raw) return f * mag; }
+    return 10 * mag;
+  }
+  const fmt = (v, step) => {
+    const d = Math.max(0, -Math.floor(Math.log10(step)));
+    return Math.abs(v) < 1e-12 ? "0" : v.toFixed(Math.min(d, 6));
+  };
+  const follow = document.getElementById("follow");
+  const hoverEl = document.getElementById("hover");
+  const scaleEl = document.getElementById("scale");
+  function followBlocks(f) {
+    let bx0 = Infinity, by0 = Infinity, bx1 = -Infinity, by1 = -Infinity;
+    f.blocks.forEach((b, i) => {
+      if (data.fixed[i]) return;
+      for (let j = 0; j < b.length; j += 2) {
+        bx0 = Math.min(bx0, b[j]); bx1 = Math.max(bx1, b[j]);
+        by0 = Math.min(by0, b[j + 1]); by1 = Math.max(by1, b[j + 1]);
+      }
+    });
+    if (bx1 > bx0) {
+      const pad = 0.1 * Math.max(bx1 - bx0, by1 - by0);
+      fitTo(bx0 - pad, by0 - pad, bx1 + pad, by1 + pad);
+    }
+  }
+  // Axes in metres along the left and bottom, and a scale bar.
+  function drawAxes() {
+    const w = canvas.width, h = canvas.height;
+    ctx.fillStyle = "#ffffff";
+    ctx.fillRect(0, 0, AXES, h);
+    ctx.fillRect(0, h - AXES, w, AXES);
+    ctx.strokeStyle = "#000000";
+    ctx.lineWidth = 1;
+    ctx.beginPath();
+    ctx.moveTo(AXES, 0); ctx.lineTo(AXES, h - AXES); ctx.lineTo(w, h - AXES);
+    ctx.stroke();
+    ctx.fillStyle = "#000000";
+    ctx.font = "11px sans-serif";
+    const step = niceStep(90 / view.scale);
+    ctx.textAlign = "center";
+    for (let x = Math.ceil(wx(AXES) / step) * step; px(x) <= w - 10; x += step) {
+      ctx.beginPath(); ctx.moveTo(px(x), h - AXES); ctx.lineTo(px(x), h - AXES + 5); ctx.stroke();
+      ctx.fillText(fmt(x, step), px(x), h - AXES + 17);
+    }
+    ctx.fillText("x (m)", (AXES + w) / 2, h - 6);
+    ctx.textAlign = "right";
+    for (let y = Math.ceil(wy(h - AXES) / step) * step; py(y) >= 10; y += step) {
+      ctx.beginPath(); ctx.moveTo(AXES, py(y)); ctx.lineTo(AXES - 5, py(y)); ctx.stroke();
+      ctx.fillText(fmt(y, step), AXES - 7, py(y) + 4);
+    }
+    ctx.save();
+    ctx.translate(11, (h - AXES) / 2);
+    ctx.rotate(-Math.PI / 2);
+    ctx.textAlign = "center";
+    ctx.fillText("y (m)", 0, 0);
+    ctx.restore();
+    // The scale bar: a nice length near a fifth of the view's width.
+    const bar = niceStep((w - AXES) / 5 / view.scale);
+    const bx = w - 20 - bar * view.scale, by = h - AXES - 14;
+    ctx.lineWidth = 3;
+    ctx.beginPath(); ctx.moveTo(bx, by); ctx.lineTo(bx + bar * view.scale, by); ctx.stroke();
+    ctx.lineWidth = 1;
+    ctx.textAlign = "center";
+    ctx.fillText(fmt(bar, bar) + " m", bx + bar * view.scale / 2, by - 6);
+    scaleEl.textContent = fmt(bar, bar) + " m";
+  }
+  // The block under canvas point (p, q) in frame f, the last drawn first; -1 if none.
+  function blockAt(f, p, q) {
+    const x = wx(p), y = wy(q);
+    for (let i = f.blocks.length - 1; i >= 0; i--) {
+      const b = f.blocks[i], n = b.length / 2;
+      if (n < 3) continue;
+      let inside = true;
+      for (let j = 0; j < n && inside; j++) {
+        const ax = b[2 * j], ay = b[2 * j + 1];
+        const bx = b[(2 * j + 2) % (2 * n)], by = b[(2 * j + 3) % (2 * n)];
+        inside = (bx - ax) * (y - ay) - (by - ay) * (x - ax) >= 0;
+      }
+      if (inside) return i;
+    }
+    return -1;
+  }
   // What colours a block: its speed, or a measure of its stress (tension positive).
   const measures = {
     speed: { name: "speed", unit: "m/s", of: (f, i) => f.speed[i] },
@@ -626,6 +728,7 @@ const SCRIPT: &str = r##""use strict";
   let timer = null;
   function draw() {
     const f = frames[k];
+    if (follow.checked) followBlocks(f);
     ctx.fillStyle = "#ffffff";
     ctx.fillRect(0, 0, canvas.width, canvas.height);
     ctx.lineWidth = 0.6;
@@ -698,6 +801,7 @@ const SCRIPT: &str = r##""use strict";
       ctx.arc(px(f.contacts[j]), py(f.contacts[j + 1]), 2.5, 0, 2 * Math.PI);
       ctx.fill();
     }
+    drawAxes();
     slider.value = String(k);
     label.textContent = "t = " + f.t.toFixed(4) + " s  (frame " + (k + 1) + " of " + frames.length + ")";
   }
@@ -717,7 +821,57 @@ const SCRIPT: &str = r##""use strict";
   play.addEventListener("click", () => { if (timer === null) start(); else stop(); });
   slider.addEventListener("input", () => { stop(); k = Number(slider.value); draw(); });
   if (select) select.addEventListener("change", () => { setMeasure(); draw(); });
-  window.ddaReport = { frame: () => k, frames: frames.length, playing: () => timer !== null };
+  // Zoom about the pointer, pan by dragging, fit all, follow; the block under the
+  // pointer named.
+  canvas.addEventListener("wheel", (e) => {
+    e.preventDefault();
+    const r = canvas.getBoundingClientRect();
+    const p = (e.clientX - r.left) * canvas.width / r.width;
+    const q = (e.clientY - r.top) * canvas.height / r.height;
+    const x = wx(p), y = wy(q);
+    view.scale *= Math.exp(-0.0015 * e.deltaY);
+    view.x0 = x - p / view.scale;
+    view.y0 = y - (canvas.height - q) / view.scale;
+    follow.checked = false;
+    draw();
+  }, { passive: false });
+  let dragging = null;
+  canvas.addEventListener("mousedown", (e) => { dragging = [e.clientX, e.clientY]; });
+  window.addEventListener("mouseup", () => { dragging = null; });
+  canvas.addEventListener("mousemove", (e) => {
+    const r = canvas.getBoundingClientRect();
+    const sxr = canvas.width / r.width, syr = canvas.height / r.height;
+    if (dragging !== null) {
+      view.x0 -= (e.clientX - dragging[0]) * sxr / view.scale;
+      view.y0 += (e.clientY - dragging[1]) * syr / view.scale;
+      dragging = [e.clientX, e.clientY];
+      follow.checked = false;
+      draw();
+      return;
+    }
+    const f = frames[k];
+    const i = blockAt(f, (e.clientX - r.left) * sxr, (e.clientY - r.top) * syr);
+    if (i < 0) { hoverEl.textContent = ""; return; }
+    let text = "block " + data.ids[i] + ": " + (data.fixed[i] ? "fixed" : "free") +
+      ", speed " + f.speed[i].toPrecision(3) + " m/s";
+    if (f.stress) {
+      text += ", stress (" + [0, 1, 2].map((c) => (1e-3 * f.stress[3 * i + c]).toPrecision(3)).join(", ") + ") kPa";
+    }
+    hoverEl.textContent = text;
+  });
+  document.getElementById("fit").addEventListener("click", () => { follow.checked = false; fitAll(); draw(); });
+  follow.addEventListener("change", () => { if (!follow.checked) fitAll(); draw(); });
+  window.ddaReport = {
+    frame: () => k,
+    frames: frames.length,
+    playing: () => timer !== null,
+    view: () => [view.x0, view.y0, view.scale],
+    // The canvas point (client coordinates) of world point (x, y).
+    client: (x, y) => {
+      const r = canvas.getBoundingClientRect();
+      return [r.left + px(x) * r.width / canvas.width, r.top + py(y) * r.height / canvas.height];
+    },
+  };
   if (frames.length > 0) draw();
 })();
 "##;
