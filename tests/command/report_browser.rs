@@ -262,7 +262,15 @@ fn report_renders_and_animates_in_headless_chromium() {
         std::fs::create_dir_all(&case).unwrap();
         let report = report_of(&case, text);
         page.navigate(&format!("file://{}", report.display()));
-        sleep_ms(200);
+        // The page unpacks its frames before it draws (asynchronously).
+        let started = Instant::now();
+        while page.eval("typeof window.ddaReport") != json!("object") {
+            assert!(
+                started.elapsed() < Duration::from_secs(10),
+                "{name}: never drawn"
+            );
+            sleep_ms(50);
+        }
 
         let frames = page.eval("window.ddaReport.frames").as_u64().unwrap();
         assert!(frames >= 2, "{name}: {frames} frames");
@@ -337,8 +345,8 @@ fn report_renders_and_animates_in_headless_chromium() {
         assert_eq!(page.eval("window.ddaReport.view()"), fitted);
         // The slider (block 1) at the last frame: hover its centroid.
         let hover = page.eval(
-            "(() => { const f = JSON.parse(document.getElementById('data').textContent).frames; \
-             const b = f[f.length - 1].blocks[1]; let x = 0, y = 0; \
+            "(() => { const b = window.ddaReport.blocks(window.ddaReport.frames - 1)[1]; \
+             let x = 0, y = 0; \
              for (let j = 0; j < b.length; j += 2) { x += b[j]; y += b[j + 1]; } \
              const n = b.length / 2; const [cx, cy] = window.ddaReport.client(x / n, y / n); \
              document.getElementById('view').dispatchEvent(new MouseEvent('mousemove', { clientX: cx, clientY: cy })); \
@@ -374,6 +382,29 @@ fn report_renders_and_animates_in_headless_chromium() {
             "{legend}"
         );
         assert!(page.eval(INKED).as_u64().unwrap() > 1000);
+
+        // The page's frames are frames.jsonl's, at the page's resolution (1e-4 of the
+        // view, here 1 mm: every coordinate within half of it).
+        let lines = std::fs::read_to_string(report.with_file_name("frames.jsonl")).unwrap();
+        let jsonl: Vec<Value> = lines
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
+        assert_eq!(jsonl.len() as u64, frames);
+        for k in [0, frames as usize / 2, frames as usize - 1] {
+            let page_blocks = page.eval(&format!("window.ddaReport.blocks({k})"));
+            for (a, b) in page_blocks
+                .as_array()
+                .unwrap()
+                .iter()
+                .zip(jsonl[k]["blocks"].as_array().unwrap())
+            {
+                for (x, y) in a.as_array().unwrap().iter().zip(b.as_array().unwrap()) {
+                    let d = (x.as_f64().unwrap() - y.as_f64().unwrap()).abs();
+                    assert!(d <= 0.5e-3 + 1e-12, "{name}: frame {k}: {x} against {y}");
+                }
+            }
+        }
 
         // Let any late error arrive.
         sleep_ms(100);

@@ -364,11 +364,18 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
     materials_and_joints(&mut page, r.scene);
 
     // Data and script.
+    // The page draws at a hundredth of frames.jsonl's resolution (1e-4 of the view,
+    // 10,000 steps across it: below a pixel at a hundred times zoom), which packs the
+    // frames in a third of the space; frames.jsonl keeps the full resolution.
+    let per_metre = (0.01 / crate::frame_resolution(&r.view)).round().max(1.0);
+    let packed = crate::pack_frames(r.frames, per_metre);
     let data = serde_json::json!({
         "view": [r.view.min.x, r.view.min.y, r.view.max.x, r.view.max.y],
         "fixed": r.model.blocks.iter().map(|b| b.fixed).collect::<Vec<_>>(),
         "ids": r.model.blocks.iter().map(|b| b.id.as_str()).collect::<Vec<_>>(),
-        "frames": r.frames,
+        // The frames packed (see `packed`), or as JSON when they do not pack.
+        "packed": packed,
+        "frames": if packed.is_some() { &[] } else { r.frames },
         // Where each block's outline is drawn (null: whole): parts of a body are drawn
         // without their glued stretches.
         "drawn": crate::drawn_edges(r.model),
@@ -578,9 +585,52 @@ fn envelope(h: &[HistoryRow], f: fn(&HistoryRow) -> f64) -> Vec<(String, Vec<(f6
 /// The page's script: draws frame k of the data on the canvas; play/pause and the slider
 /// move k. `window.ddaReport` exposes the current frame for tests.
 const SCRIPT: &str = r##""use strict";
-(function () {
+// The frames, unpacked from `data.packed` (see dda_report's `packed`) or as given.
+async function ddaFrames(data) {
+  if (data.packed === null || data.packed === undefined) return data.frames;
+  const bin = Uint8Array.from(atob(data.packed), (c) => c.charCodeAt(0));
+  const stream = new Blob([bin]).stream().pipeThrough(new DecompressionStream("deflate"));
+  const buf = await new Response(stream).arrayBuffer();
+  const v = new DataView(buf);
+  let o = 0;
+  const u32 = () => { const x = v.getUint32(o, true); o += 4; return x; };
+  const nf = u32(), nb = u32();
+  const pm = v.getFloat64(o, true); o += 8;
+  const frames = [];
+  let last = Array.from({ length: nb }, () => null);
+  for (let k = 0; k < nf; k++) {
+    const f = { t: v.getFloat64(o, true) }; o += 8;
+    f.svg = v.getUint8(o) === 1; o += 1;
+    const hasStress = v.getUint8(o) === 1; o += 1;
+    f.blocks = [];
+    for (let i = 0; i < nb; i++) {
+      const n = v.getUint16(o, true); o += 2;
+      const prev = last[i];
+      const same = prev !== null && prev.length === 2 * n;
+      const now = new Array(2 * n);
+      for (let j = 0; j < 2 * n; j++) {
+        const d = v.getInt32(o, true); o += 4;
+        now[j] = same ? (prev[j] + d) | 0 : d;
+      }
+      last[i] = now;
+      f.blocks.push(now.map((c) => c / pm));
+    }
+    f.speed = [];
+    for (let i = 0; i < nb; i++) { f.speed.push(v.getFloat32(o, true)); o += 4; }
+    if (hasStress) {
+      f.stress = [];
+      for (let i = 0; i < 3 * nb; i++) { f.stress.push(v.getFloat32(o, true)); o += 4; }
+    }
+    const nc = u32();
+    f.contacts = [];
+    for (let j = 0; j < 2 * nc; j++) { f.contacts.push(v.getInt32(o, true) / pm); o += 4; }
+    frames.push(f);
+  }
+  return frames;
+}
+(async function () {
   const data = JSON.parse(document.getElementById("data").textContent);
-  const frames = data.frames;
+  const frames = await ddaFrames(data);
   const canvas = document.getElementById("view");
   const ctx = canvas.getContext("2d");
   const slider = document.getElementById("slider");
@@ -866,6 +916,8 @@ const SCRIPT: &str = r##""use strict";
     frames: frames.length,
     playing: () => timer !== null,
     view: () => [view.x0, view.y0, view.scale],
+    // Frame k's block outlines, as the page unpacked them.
+    blocks: (k) => frames[k].blocks,
     // The canvas point (client coordinates) of world point (x, y).
     client: (x, y) => {
       const r = canvas.getBoundingClientRect();

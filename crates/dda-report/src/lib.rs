@@ -4,11 +4,13 @@
 //! (`xtask`) draw plots without the command-line facade.
 
 mod html;
+mod packed;
 mod plot;
 
 pub use self::html::{
     BoltRow, HistoryRow, PointRow, Report, parse_bolts, parse_history, parse_points, report_html,
 };
+pub use self::packed::pack_frames;
 pub use self::plot::plot;
 
 use dda_core::{Model, Simulation, StepRecord};
