@@ -25,7 +25,7 @@ pub const ENERGY_MARGIN: f64 = 0.002;
 pub const SPEED_FACTOR: f64 = 3.0;
 
 /// The worst instant of a criterion: its value and when.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct Worst {
     /// The criterion's value there (see [`CollapseWatch`]).
     pub value: f64,

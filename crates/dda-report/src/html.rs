@@ -924,6 +924,9 @@ async function ddaFrames(data) {
       return [r.left + px(x) * r.width / canvas.width, r.top + py(y) * r.height / canvas.height];
     },
   };
+  // `#frame=N` or `#frame=last` in the address opens the page at that frame.
+  const at = /frame=(\d+|last)/.exec(location.hash);
+  if (at) k = at[1] === "last" ? frames.length - 1 : Math.min(Number(at[1]), frames.length - 1);
   if (frames.length > 0) draw();
 })();
 "##;
