@@ -294,31 +294,110 @@ pub fn frame_resolution(view: &Aabb) -> f64 {
     10f64.powi((size * 1e-6).log10().floor() as i32)
 }
 
-/// An SVG picture of `frame` of a run of `model`, in the fixed `view` (y up), fixed
-/// blocks grey.
+/// An SVG picture of `frame` of a run of `model`, in the fixed `view` (y up): the time,
+/// axes in metres, blocks coloured by speed (blue at rest to red at the frame's fastest
+/// free block), fixed blocks grey.
 pub fn frame_svg(model: &Model, frame: &Frame, view: &Aabb) -> String {
     let size = view.size();
     let width = 800.0;
     let height = (width * size.y / size.x).clamp(100.0, 4000.0);
+    // Margins (pixels): the axes at the left and the bottom, the time and the legend on
+    // top.
+    let (ml, mt, mr, mb) = (50.0, 30.0, 15.0, 40.0);
     let stroke = 0.6 * size.x / width;
+    let vmax = frame
+        .speed
+        .iter()
+        .zip(&model.blocks)
+        .filter(|(_, m)| !m.fixed)
+        .map(|(v, _)| *v)
+        .fold(0.0f64, f64::max);
     let mut s = String::new();
     let _ = writeln!(
         s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{height:.0}" viewBox="{} {} {} {}">"#,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{:.0}" height="{:.0}" font-family="sans-serif" font-size="12">"#,
+        width + ml + mr,
+        height + mt + mb
+    );
+    let _ = writeln!(
+        s,
+        r##"<title>{} t = {:.4} s</title><rect width="100%" height="100%" fill="white"/>
+<text x="{ml}" y="18">{}: t = {:.4} s; blocks coloured by speed, blue 0 to red {:.3} m/s; fixed blocks grey</text>"##,
+        escape(&model.name),
+        frame.t,
+        escape(&model.name),
+        frame.t,
+        vmax
+    );
+    // The axes, in metres.
+    let (xt, yt) = (
+        plot::Ticks::new(view.min.x, view.max.x),
+        plot::Ticks::new(view.min.y, view.max.y),
+    );
+    let px = |x: f64| ml + (x - view.min.x) / size.x * width;
+    let py = |y: f64| mt + (view.max.y - y) / size.y * height;
+    let _ = writeln!(
+        s,
+        r#"<g stroke="black"><line x1="{ml}" y1="{mt}" x2="{ml}" y2="{}"/><line x1="{ml}" y1="{}" x2="{}" y2="{}"/></g>"#,
+        mt + height,
+        mt + height,
+        ml + width,
+        mt + height
+    );
+    for v in xt.values().filter(|&v| v >= view.min.x && v <= view.max.x) {
+        let _ = writeln!(
+            s,
+            r#"<line x1="{x:.1}" y1="{}" x2="{x:.1}" y2="{}" stroke="black"/><text x="{x:.1}" y="{}" text-anchor="middle">{}</text>"#,
+            mt + height,
+            mt + height + 5.0,
+            mt + height + 18.0,
+            xt.label(v),
+            x = px(v)
+        );
+    }
+    for v in yt.values().filter(|&v| v >= view.min.y && v <= view.max.y) {
+        let _ = writeln!(
+            s,
+            r#"<line x1="{}" y1="{y:.1}" x2="{ml}" y2="{y:.1}" stroke="black"/><text x="{}" y="{:.1}" text-anchor="end">{}</text>"#,
+            ml - 5.0,
+            ml - 7.0,
+            py(v) + 4.0,
+            yt.label(v),
+            y = py(v)
+        );
+    }
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="{}" text-anchor="middle">x (m)</text><text x="12" y="{y}" transform="rotate(-90 12 {y})" text-anchor="middle">y (m)</text>"#,
+        ml + width / 2.0,
+        mt + height + 34.0,
+        y = mt + height / 2.0
+    );
+    // The blocks, in world coordinates (y up) in a viewport of their own.
+    let _ = writeln!(
+        s,
+        r#"<svg x="{ml}" y="{mt}" width="{width:.0}" height="{height:.0}" viewBox="{} {} {} {}" preserveAspectRatio="none">"#,
         view.min.x, -view.max.y, size.x, size.y
     );
     let _ = writeln!(
         s,
-        r#"<title>{} t = {:.4} s</title><g stroke="black" stroke-width="{stroke}" stroke-linejoin="round">"#,
-        escape(&model.name),
-        frame.t
+        r#"<g stroke="black" stroke-width="{stroke}" stroke-linejoin="round">"#
     );
     let drawn = drawn_edges(model);
     for (i, m) in model.blocks.iter().enumerate() {
         if frame.blocks[i].is_empty() {
             continue;
         }
-        let fill = if m.fixed { "#b0b0b0" } else { "#e8c890" };
+        let fill = if m.fixed {
+            "#b0b0b0".to_string()
+        } else {
+            let f = if vmax > 0.0 {
+                (frame.speed[i] / vmax).min(1.0)
+            } else {
+                0.0
+            };
+            format!("hsl({:.0},75%,60%)", 240.0 - 240.0 * f)
+        };
         let v: Vec<DVec2> = frame.polygon(i).collect();
         let pts: Vec<String> = v.iter().map(|v| format!("{},{}", v.x, -v.y)).collect();
         match &drawn[i] {
@@ -348,7 +427,7 @@ pub fn frame_svg(model: &Model, frame: &Frame, view: &Aabb) -> String {
             }
         }
     }
-    s.push_str("</g>\n</svg>\n");
+    s.push_str("</g>\n</svg>\n</svg>\n");
     s
 }
 
