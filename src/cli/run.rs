@@ -56,6 +56,9 @@ struct OutputMarks {
     /// Bytes of bolts.csv written (a scene with bolts).
     #[serde(default)]
     bolts_bytes: u64,
+    /// The scene file or built-in scene the run was made from, as named.
+    #[serde(default)]
+    source: Option<String>,
 }
 
 /// Options of `run` and `resume` that bound or relax a run.
@@ -238,6 +241,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode, Failure> {
     let sim = Simulation::new(model, options);
     let mut job = Job::new(scene, sim, staging, out, history, frames, args.quiet);
     job.marks.checkpoint_every = args.checkpoint_every.unwrap_or(0);
+    job.marks.source = Some(source);
     job.marks.keep_going = args.limits.keep_going;
     job.max_steps = args.limits.max_steps;
     job.signals = signals;
@@ -684,6 +688,7 @@ impl Job {
         }
         let mut summary = Summary::of(&self.sim, error.clone());
         summary.status = status.to_string();
+        summary.source.clone_from(&self.marks.source);
         let json = serde_json::to_string_pretty(&summary)
             .map_err(|e| Failure::Output(format!("cannot serialise the summary: {e}")))?;
         write_new(&self.work.join("summary.json"), &(json + "\n"))?;

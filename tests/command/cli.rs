@@ -95,9 +95,12 @@ fn run_writes_summary_history_and_frames() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let s = summary(&out);
     assert_eq!(s["scene"], "sliding-block");
+    assert_eq!(s["source"], SCENE);
     assert_eq!(s["detector"], "cover");
     assert_eq!(s["status"], "completed");
     assert_eq!(s["time_simulated"], 0.2);
+    let report = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(report.contains(SCENE), "the report names the scene file");
     let effects: Vec<&str> = s["effects"]
         .as_array()
         .unwrap()

@@ -38,6 +38,10 @@ pub struct BlockSummary {
 pub struct Summary {
     /// Scene name.
     pub scene: String,
+    /// The scene file or built-in scene the run was made from, as the command named it
+    /// (set by the `dda` command; absent for a library run).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
     /// Detector name.
     pub detector: String,
     /// Effects assembled.
@@ -135,6 +139,7 @@ impl Summary {
         let p = &sim.model().params;
         Summary {
             scene: sim.model().name.clone(),
+            source: None,
             detector: sim.detector_name().to_string(),
             effects: sim
                 .effects()

@@ -305,8 +305,12 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
 
     // Summary and parameters.
     page.push_str("<h2>Summary</h2>\n<table>\n");
-    let rows: [(&str, String); 12] = [
+    let rows: [(&str, String); 13] = [
         ("scene", s.scene.clone()),
+        (
+            "made from",
+            s.source.clone().unwrap_or_else(|| "(not recorded)".into()),
+        ),
         ("detector", s.detector.clone()),
         ("status", s.status.clone()),
         ("simulated time (s)", s.time_simulated.to_string()),
