@@ -317,6 +317,7 @@ fn write_files(out: &Path, rows: &[Row]) -> Result<(), String> {
          hard cases: docs/robustness.md (<a href=\"../../robustness.md\">robustness.md</a>).</p>"
     );
     html.push_str(&table_html(&table(rows)));
+    html.push_str(&beside_the_paper(rows));
     let _ = writeln!(
         html,
         "<p>Raw data: <a href=\"sweep.csv\">sweep.csv</a>, <a href=\"sweep.json\">sweep.json</a>.</p>"
@@ -497,6 +498,116 @@ fn models_of(rows: &[Row]) -> Vec<usize> {
     models.sort_unstable();
     models.dedup();
     models
+}
+
+/// The paper's Tables 4 and 5 as published (Zhuang, Zheng et al. 2021): per column, total
+/// steps, OCI cycles and contact-detection seconds, for TB-CD-2 and for CB-CD at r_tol 1,
+/// 2, 4, 6, 8 and 10. Shown beside ours for comparison only; never reported as ours.
+const PAPER_TABLES: [(usize, &str, [f64; 7]); 12] = [
+    (
+        20,
+        "total steps",
+        [644.0, 633.0, 340.0, 183.0, 144.0, 111.0, 105.0],
+    ),
+    (
+        20,
+        "OCI cycles",
+        [1325.0, 1270.0, 912.0, 569.0, 533.0, 467.0, 441.0],
+    ),
+    (
+        20,
+        "CD cost (s)",
+        [1.773, 0.754, 0.4284, 0.2448, 0.2081, 0.1655, 0.1577],
+    ),
+    (
+        93,
+        "total steps",
+        [774.0, 789.0, 427.0, 274.0, 259.0, 220.0, 222.0],
+    ),
+    (
+        93,
+        "OCI cycles",
+        [2146.0, 2375.0, 1612.0, 1235.0, 1335.0, 1173.0, 1190.0],
+    ),
+    (
+        93,
+        "CD cost (s)",
+        [43.37, 21.46, 12.34, 8.05, 8.86, 7.7, 8.38],
+    ),
+    (
+        229,
+        "total steps",
+        [1111.0, 1138.0, 628.0, 433.0, 446.0, 447.0, 426.0],
+    ),
+    (
+        229,
+        "OCI cycles",
+        [3324.0, 3485.0, 2425.0, 2105.0, 2045.0, 2242.0, 2073.0],
+    ),
+    (
+        229,
+        "CD cost (s)",
+        [21.25, 15.56, 10.48, 9.68, 10.13, 11.64, 12.06],
+    ),
+    (
+        826,
+        "total steps",
+        [1227.0, 1333.0, 1001.0, 965.0, 981.0, 1004.0, 971.0],
+    ),
+    (
+        826,
+        "OCI cycles",
+        [5226.0, 6051.0, 5690.0, 5811.0, 5883.0, 6030.0, 5783.0],
+    ),
+    (
+        826,
+        "CD cost (s)",
+        [111.3, 107.3, 106.1, 108.4, 144.6, 172.3, 191.49],
+    ),
+];
+
+/// Our sweep beside the paper's Tables 4 and 5: the same quantities, ours from this
+/// sweep (type-2 at r_tol 1, cover at each r_tol), the paper's as published.
+fn beside_the_paper(rows: &[Row]) -> String {
+    let rtols = [1.0, 2.0, 4.0, 6.0, 8.0, 10.0];
+    let mut s = String::from(
+        "<h2>Beside the paper's Tables 4 and 5</h2>\n<p>The paper's numbers as published \
+         (its code, its machine), ours from this sweep. Counts compare; seconds do not \
+         (a different code on a different machine), only their ratios along a row.</p>\n\
+         <table>\n<tr><th>model</th><th>quantity</th><th>from</th><th>TB-CD-2</th>",
+    );
+    for r in rtols {
+        let _ = write!(s, "<th>CB-CD r_tol={r}</th>");
+    }
+    s.push_str("</tr>\n");
+    let find = |m: usize, d: &str, r: f64| {
+        rows.iter()
+            .find(|x| x.model == m && x.detector == d && x.r_tol == r)
+    };
+    for (m, q, paper) in PAPER_TABLES {
+        let ours = |x: &Row| -> String {
+            match q {
+                "total steps" => x.steps.to_string(),
+                "OCI cycles" => x.oci_cycles.to_string(),
+                _ if x.detection_s < 0.01 => format!("{:.1e}", x.detection_s),
+                _ => format!("{:.3}", x.detection_s),
+            }
+        };
+        let _ = write!(s, "<tr><td>{m}</td><td>{q}</td><td>the paper</td>");
+        for v in paper {
+            let _ = write!(s, "<td>{v}</td>");
+        }
+        let _ = write!(s, "</tr>\n<tr><td>{m}</td><td>{q}</td><td><b>ours</b></td>");
+        let base = find(m, "type-2", 1.0).map_or("-".into(), ours);
+        let _ = write!(s, "<td>{base}</td>");
+        for r in rtols {
+            let v = find(m, "cover", r).map_or("-".into(), ours);
+            let _ = write!(s, "<td>{v}</td>");
+        }
+        s.push_str("</tr>\n");
+    }
+    s.push_str("</table>\n");
+    s
 }
 
 /// The page's first paragraphs: the sweep's result in words, from its numbers.
