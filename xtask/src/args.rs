@@ -47,9 +47,33 @@ pub fn detector(value: &str) -> Result<String, String> {
         .map_err(|e| e.to_string())
 }
 
+/// A shard `I/N` of a job array: the I-th of N parts (1-based), as (I - 1, N).
+pub fn shard(value: &str) -> Result<(usize, usize), String> {
+    let bad = || format!("`{value}` is not a shard I/N with 1 <= I <= N");
+    let (i, n) = value.trim().split_once('/').ok_or_else(bad)?;
+    let (i, n): (usize, usize) = (
+        i.trim().parse().map_err(|_| bad())?,
+        n.trim().parse().map_err(|_| bad())?,
+    );
+    if i == 0 || i > n {
+        return Err(bad());
+    }
+    Ok((i - 1, n))
+}
+
 #[cfg(test)]
 mod tests {
-    use super::{detector, paper_column, positive_count, positive_number};
+    use super::{detector, paper_column, positive_count, positive_number, shard};
+
+    /// A shard is I/N with 1 <= I <= N, returned 0-based.
+    #[test]
+    fn shards_are_read_and_checked() {
+        assert_eq!(shard("1/1"), Ok((0, 1)));
+        assert_eq!(shard(" 3 / 8 "), Ok((2, 8)));
+        for bad in ["0/2", "3/2", "2", "a/b", "1/0", ""] {
+            assert!(shard(bad).is_err(), "{bad}");
+        }
+    }
 
     #[test]
     fn errors_name_the_value() {

@@ -81,12 +81,32 @@ pub struct Options {
     #[arg(long, default_value_t = MAX_STEPS, value_parser = args::positive_count)]
     pub max_steps: u64,
     /// Output directory.
-    #[arg(long, default_value = "runs/sweep")]
+    #[arg(long, default_value = "runs/sweep", global = true)]
     pub out: PathBuf,
     /// Write the page, the table and the plots again from the output directory's
     /// sweep.json, running nothing.
     #[arg(long)]
     pub render: bool,
+    /// Run only shard I of N (`--shard 2/8`): the runs whose index in the sweep's order
+    /// (model, detector, r_tol) is I - 1 modulo N, so that a batch scheduler's job array
+    /// runs the sweep in N parts; `cargo xtask sweep merge` joins them.
+    #[arg(long, value_parser = args::shard, value_name = "I/N")]
+    pub shard: Option<(usize, usize)>,
+    /// `merge DIR...`: join the shards' sweep.json files into one sweep (in `--out`).
+    #[command(subcommand)]
+    pub action: Option<Action>,
+}
+
+/// What `cargo xtask sweep` does besides running.
+#[derive(Debug, clap::Subcommand)]
+pub enum Action {
+    /// Join the sweep.json of each shard's output folder into one sweep in `--out`: the
+    /// same rows, in the same order, as one unsharded sweep (wall seconds aside).
+    Merge {
+        /// The shards' output folders.
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+    },
 }
 
 /// Steps after which a run is stopped and counted as not permissible, unless
@@ -173,6 +193,19 @@ pub fn run_one(
 /// Runs the sweep and writes its files; prints the table.
 pub fn run(root: &Path, o: &Options) -> Result<(), String> {
     let out = root.join(&o.out);
+    if let Some(Action::Merge { dirs }) = &o.action {
+        let rows = merge(&dirs.iter().map(|d| root.join(d)).collect::<Vec<_>>())?;
+        std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+        write_files(&out, &rows)?;
+        println!("{}", table(&rows));
+        println!(
+            "wrote {} ({} runs from {} shards)",
+            out.display(),
+            rows.len(),
+            dirs.len()
+        );
+        return Ok(());
+    }
     if o.render {
         let path = out.join("sweep.json");
         let text =
@@ -191,6 +224,14 @@ pub fn run(root: &Path, o: &Options) -> Result<(), String> {
                 combos.push((m, d.clone(), r));
             }
         }
+    }
+    if let Some((i, n)) = o.shard {
+        combos = combos
+            .into_iter()
+            .enumerate()
+            .filter(|(k, _)| k % n == i)
+            .map(|(_, c)| c)
+            .collect();
     }
     let bar = indicatif::ProgressBar::new(combos.len() as u64);
     bar.set_style(
@@ -225,16 +266,50 @@ pub fn run(root: &Path, o: &Options) -> Result<(), String> {
         }
     });
     bar.finish_and_clear();
-    let rows: Vec<Row> = rows
+    let mut rows: Vec<Row> = rows
         .into_inner()
         .map_err(|_| "a run panicked".to_string())?
         .into_iter()
         .flatten()
         .collect();
+    // The sweep's order, whatever the options' (and a shard's rows in it, for merge).
+    rows.sort_by(sweep_order);
     write_files(&out, &rows)?;
     println!("{}", table(&rows));
     println!("wrote {}", out.display());
     Ok(())
+}
+
+/// The order of a sweep's rows: by model, detector name and r_tol.
+fn sweep_order(a: &Row, b: &Row) -> std::cmp::Ordering {
+    a.model
+        .cmp(&b.model)
+        .then(a.detector.cmp(&b.detector))
+        .then(a.r_tol.total_cmp(&b.r_tol))
+}
+
+/// The rows of the shards' sweep.json files in `dirs`, in the sweep's order (model,
+/// detector, r_tol); an error names a file that cannot be read and a run found twice.
+pub fn merge(dirs: &[PathBuf]) -> Result<Vec<Row>, String> {
+    let mut rows: Vec<Row> = Vec::new();
+    for d in dirs {
+        let path = d.join("sweep.json");
+        let text =
+            std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let shard: Vec<Row> =
+            serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+        rows.extend(shard);
+    }
+    rows.sort_by(sweep_order);
+    for w in rows.windows(2) {
+        if w[0].model == w[1].model && w[0].detector == w[1].detector && w[0].r_tol == w[1].r_tol {
+            return Err(format!(
+                "the run {} blocks, {}, r_tol {} is in two shards",
+                w[0].model, w[0].detector, w[0].r_tol
+            ));
+        }
+    }
+    Ok(rows)
 }
 
 /// The header line of `sweep.csv`.
