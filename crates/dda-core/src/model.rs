@@ -464,19 +464,21 @@ impl Scene {
                 list.push(i);
             }
         }
-        // The parts of a body move together: all driven or none.
-        for b in blocks.iter() {
-            if let Some(body) = b.body
-                && let Some(other) = blocks
-                    .iter()
-                    .find(|o| o.body == Some(body) && o.driven != b.driven)
-            {
+        // The parts of a body move together: all driven or none (each part against the
+        // body's first).
+        let mut first: BTreeMap<u32, usize> = BTreeMap::new();
+        for (i, b) in blocks.iter().enumerate() {
+            let Some(body) = b.body else {
+                continue;
+            };
+            let f = *first.entry(body).or_insert(i);
+            if blocks[f].driven != b.driven {
+                let (on, off) = if b.driven { (i, f) } else { (f, i) };
                 return Err(invalid(
                     "seismic.blocks",
                     format!(
                         "`{}` follows the ground and `{}`, a part of the same body, does not",
-                        if b.driven { &b.id } else { &other.id },
-                        if b.driven { &other.id } else { &b.id }
+                        blocks[on].id, blocks[off].id
                     ),
                 ));
             }

@@ -211,7 +211,13 @@ impl Simulation {
         // and its end's (docs/method.md section 12), and so is the ground's.
         let average = self.step_rule() == StepRule::Average;
         let mut work = 0.0;
+        let driven = |b: u32| self.model.blocks[b as usize].driven;
         for s in &self.scratch.springs {
+            // Only a spring with a driven block has a driven part (and a row worth making).
+            let key = self.state.contacts.contacts[s.contact as usize].key;
+            if !(driven(key.vertex_block) || driven(key.edge_block)) {
+                continue;
+            }
             let row = self.spring_row(s);
             if row.driven != 0.0 {
                 let mut q = row.eval(&self.scratch.d);

@@ -53,14 +53,13 @@ impl Simulation {
             .collect();
         let supported = supported_blocks(&model.blocks, p.d_tol, &tied);
         let mut heaviest = 0.0f64;
-        for (b, s) in model.blocks.iter_mut().zip(&supported) {
+        for (i, (b, s)) in model.blocks.iter_mut().zip(&supported).enumerate() {
             // Blocks in flight are held: they have no equilibrium.
             if !s {
                 b.fixed = true;
             }
             if !b.fixed {
-                let density = self.model.materials[b.material].density;
-                heaviest = heaviest.max(density * b.polygon.area());
+                heaviest = heaviest.max(self.block_mass(i));
             }
         }
         if heaviest == 0.0 {

@@ -327,6 +327,12 @@ impl Simulation {
             .fold(self.model.params.duration, f64::min)
     }
 
+    /// Block `i`'s mass per metre of thickness, kg/m.
+    pub(crate) fn block_mass(&self, i: usize) -> f64 {
+        let mat = self.model.materials[self.material[i] as usize];
+        mat.density * self.state.blocks[i].polygon.area()
+    }
+
     /// Whether block `i` has been removed (excavated).
     pub fn is_removed(&self, i: usize) -> bool {
         self.removed[i]
@@ -458,8 +464,7 @@ impl Simulation {
         watch.lap(&mut rec, Phase::Assembly);
         self.scratch.saved.clone_from(&self.state.contacts.contacts);
         let p = &self.model.params;
-        let (_, d_max, theta_max, max_oci, dt0) =
-            (p.duration, p.d_max, p.theta_max, p.max_oci, p.dt0);
+        let (d_max, theta_max, max_oci, dt0) = (p.d_max, p.theta_max, p.max_oci, p.dt0);
         // The step lands on the run's end and on every excavation's time.
         let target = self.next_event();
         let remaining = target - self.state.t;

@@ -98,11 +98,7 @@ impl Simulation {
             return f64::INFINITY;
         };
         let g = p.gravity.map_or(0.0, |g| g.length());
-        let mass = |i: usize| -> Option<f64> {
-            self.free[i]?;
-            let mat = self.model.materials[self.material[i] as usize];
-            Some(mat.density * self.state.blocks[i].polygon.moments().area)
-        };
+        let mass = |i: usize| self.free[i].map(|_| self.block_mass(i));
         let mut room = f64::INFINITY;
         for pc in &self.state.contacts.pairs {
             let (a, b) = (pc.pair.a as usize, pc.pair.b as usize);

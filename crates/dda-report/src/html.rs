@@ -270,7 +270,9 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
     );
 
     // Time histories.
-    let series = |f: fn(&HistoryRow) -> f64| envelope(r.history, f);
+    let series = |f: fn(&HistoryRow) -> f64| {
+        envelope(&r.history.iter().map(|h| (h.t, f(h))).collect::<Vec<_>>())
+    };
     page.push_str("<h2>Time histories</h2>\n");
     if r.history.len() > PLOT_POINTS {
         let _ = writeln!(
@@ -512,7 +514,7 @@ fn point_and_bolt_plots(page: &mut String, r: &Report) {
                 let mut series = Vec::new();
                 for (c, axis) in ["x", "y"].iter().enumerate() {
                     let points: Vec<(f64, f64)> = rows.iter().map(|p| (p.t, f(p)[c])).collect();
-                    for (name, s) in envelope_of(&points) {
+                    for (name, s) in envelope(&points) {
                         let name = if name.is_empty() {
                             axis.to_string()
                         } else {
@@ -537,7 +539,7 @@ fn point_and_bolt_plots(page: &mut String, r: &Report) {
                 .filter(|b| b.bolt == k)
                 .filter_map(|b| b.tension.map(|x| (b.t, 1e-3 * x)))
                 .collect();
-            for (name, s) in envelope_of(&points) {
+            for (name, s) in envelope(&points) {
                 series.push((format!("bolt {k} {name}").trim_end().to_string(), s));
             }
         }
@@ -554,34 +556,20 @@ fn point_and_bolt_plots(page: &mut String, r: &Report) {
     }
 }
 
-/// [`envelope`] of a series of (t, y) points.
-fn envelope_of(points: &[(f64, f64)]) -> Vec<(String, Vec<(f64, f64)>)> {
-    let rows: Vec<HistoryRow> = points
-        .iter()
-        .map(|&(t, y)| HistoryRow {
-            t,
-            kinetic_energy: y,
-            ..HistoryRow::default()
-        })
-        .collect();
-    envelope(&rows, |r| r.kinetic_energy)
-}
-
-/// The series of `f` over the history `h` for a plot: every step when there are at most
-/// [`PLOT_POINTS`]; else, over each run of `h.len() / PLOT_POINTS` steps (rounded up), its
-/// largest and smallest value at the time of the step that has it (two series, `max` and
-/// `min`), so that every peak is plotted as recorded.
-fn envelope(h: &[HistoryRow], f: fn(&HistoryRow) -> f64) -> Vec<(String, Vec<(f64, f64)>)> {
-    if h.len() <= PLOT_POINTS {
-        return vec![(String::new(), h.iter().map(|r| (r.t, f(r))).collect())];
+/// The series of (t, y) `points` for a plot: every point when there are at most
+/// [`PLOT_POINTS`]; else, over each run of `points.len() / PLOT_POINTS` points (rounded
+/// up), its largest and smallest value at the time of the point that has it (two series,
+/// `max` and `min`), so that every peak is plotted as recorded.
+fn envelope(points: &[(f64, f64)]) -> Vec<(String, Vec<(f64, f64)>)> {
+    if points.len() <= PLOT_POINTS {
+        return vec![(String::new(), points.to_vec())];
     }
-    let stride = h.len().div_ceil(PLOT_POINTS);
+    let stride = points.len().div_ceil(PLOT_POINTS);
     let (mut high, mut low) = (Vec::new(), Vec::new());
-    for run in h.chunks(stride) {
-        let at = |r: &HistoryRow| (r.t, f(r));
-        let by = |a: &&HistoryRow, b: &&HistoryRow| f(a).total_cmp(&f(b));
-        high.extend(run.iter().max_by(by).map(at));
-        low.extend(run.iter().min_by(by).map(at));
+    for run in points.chunks(stride) {
+        let by = |a: &&(f64, f64), b: &&(f64, f64)| a.1.total_cmp(&b.1);
+        high.extend(run.iter().max_by(by).copied());
+        low.extend(run.iter().min_by(by).copied());
     }
     vec![("max".into(), high), ("min".into(), low)]
 }
@@ -957,7 +945,8 @@ mod envelope_tests {
         let h: Vec<HistoryRow> = (0..n)
             .map(|k| row(k, if k == 2017 { 9.0 } else { (k % 5) as f64 }))
             .collect();
-        let s = envelope(&h, |r| r.max_penetration);
+        let points: Vec<(f64, f64)> = h.iter().map(|r| (r.t, r.max_penetration)).collect();
+        let s = envelope(&points);
         assert_eq!(s.len(), 2);
         let top = s[0]
             .1
@@ -970,7 +959,7 @@ mod envelope_tests {
         // residues mod 5 miss only one of 0 and 1: every plotted minimum is 0 or 1.
         assert!(s[1].1.iter().all(|p| p.1 <= 1.0));
         assert!(s[1].1.iter().any(|p| p.1 == 0.0));
-        let short = envelope(&h[..10], |r| r.max_penetration);
+        let short = envelope(&points[..10]);
         assert_eq!(short.len(), 1);
         assert_eq!(short[0].1.len(), 10);
     }
