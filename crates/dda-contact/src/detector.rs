@@ -213,13 +213,20 @@ fn detect_range(
 /// vertex has left it over an end): the move never lengthens the spring, so it stores no
 /// energy, and the contact stays on the face the vertex entered rather than jump to the
 /// block's far side (a vertex deep in a thin plate is nearer the far face, and a spring
-/// to it pushes the vertex through). States are inherited after, where the key is the
-/// same.
+/// to it pushes the vertex through). One the detector listed but did not choose (the
+/// two faces of a flush joint turned through parallel, so that another cover attains
+/// d_RE2) is made active again while its vertex is behind its edge's line within it.
+/// States are inherited after, where the key is the same.
 fn keep_closed(shapes: &[BlockShape], before: &[Contact], start: usize, list: &mut Vec<Contact>) {
     let listed = list.len();
     for old in before.iter().filter(|o| o.active && o.state.is_closed()) {
         let k = old.key;
-        if list[start..listed].iter().any(|c| c.key == k) {
+        if let Some(c) = list[start..listed].iter_mut().find(|c| c.key == k) {
+            // Listed but not chosen (its faces turned through parallel, so that another
+            // cover attains d_RE2): it stays active while its vertex is behind its edge.
+            if c.d_n < 0.0 && (0.0..=1.0).contains(&c.r) {
+                c.active = true;
+            }
             continue;
         }
         let (vs, es) = (

@@ -176,6 +176,15 @@ impl Simulation {
         }
     }
 
+    /// How far a closed contact's vertex must be outside its edge's line for it to open,
+    /// m: 1e-9 d_tol. Blocks that touch to rounding (joint faces cut from one rock)
+    /// otherwise chatter between open and closed on d of order 1e-17 m and never
+    /// converge. The tension held inside the band, p * 1e-9 d_tol, is negligible (our
+    /// choice; the paper is silent).
+    pub(crate) fn open_band(&self) -> f64 {
+        1e-9 * self.model.params.d_tol
+    }
+
     /// Re-checks every active contact against the trial solution; returns how many
     /// changed state.
     pub(crate) fn update_states(&mut self) -> usize {
@@ -183,11 +192,7 @@ impl Simulation {
         let law = Law {
             normal_penalty: p.normal_penalty,
             shear_penalty: p.shear_penalty,
-            // A closed contact opens only beyond a band of 1e-9 d_tol: blocks that touch
-            // to rounding (joint faces cut from one rock) otherwise chatter between open
-            // and closed on d of order 1e-17 m and never converge. The tension held inside
-            // the band, p * 1e-9 d_tol, is negligible (our choice; the paper is silent).
-            open_band: 1e-9 * p.d_tol,
+            open_band: self.open_band(),
         };
         let mut changed = 0;
         self.scratch.flipped.clear();

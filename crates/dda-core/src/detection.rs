@@ -53,10 +53,13 @@ impl Simulation {
         );
         let first = self.state.totals.steps == 0;
         let glue = self.model.joints_by_edge;
+        let close_touching = first && self.close_touching;
+        let open_band = self.open_band();
         for k in 0..self.state.contacts.contacts.len() {
             let c = self.state.contacts.contacts[k];
-            // Only closed contacts, and with glue active ones, need their joint.
-            if !(c.state.is_closed() || glue && c.active) {
+            // Only closed contacts, and with glue or closing the touching ones active
+            // ones, need their joint.
+            if !(c.state.is_closed() || (glue || close_touching) && c.active) {
                 continue;
             }
             let j = self.joint(k);
@@ -79,8 +82,17 @@ impl Simulation {
                 }
                 continue;
             }
-            // Open contacts are left as they are.
+            // Open contacts are left as they are, but for the settling's touching ones.
             if !c.state.is_closed() {
+                if close_touching && c.active && c.d_n <= open_band {
+                    let c = &mut self.state.contacts.contacts[k];
+                    c.state = if j.has_shear() {
+                        ContactState::Locked
+                    } else {
+                        ContactState::Sliding
+                    };
+                    c.locked_r = c.r.clamp(0.0, 1.0);
+                }
                 continue;
             }
             let c = &mut self.state.contacts.contacts[k];

@@ -6,32 +6,58 @@
 //! incline keeps the error of wherever the ring stopped, and a stack of blocks slides
 //! apart where it should slide as one (docs/accuracy.md; `tests/physics/stacks.rs`).
 //!
-//! Settling takes the blocks to the equilibrium of their weight and loads on their
-//! contacts with every joint held (glued: no opening, no sliding) before t = 0, by a
-//! few static steps of a copy of the model, long enough that inertia does not resist
-//! them; blocks that rest on nothing (in flight) are held where they are. The run then
-//! starts from the settled places and stresses, with the settled contacts (their
-//! springs loaded, shear springs anchored where they were) under the scene's own
-//! joints, so that a joint that cannot hold its load slides from the first step. The
-//! work gravity and the loads did while settling is added to the energy the physics
-//! guard counts as supplied.
+//! Settling loads the contacts before t = 0 with the forces the run starts with. It takes
+//! static steps of a copy of the model under the scene's own joints: each is a step of
+//! the run from rest (static: the velocities reset, so nothing rings), of the run's own
+//! size dt, or longer where the inertia 2 m / dt^2 of the heaviest block would exceed
+//! the penalty ([`SETTLE_INERTIA`]). Stiff modes (the contact springs) converge in a
+//! few such steps, to the forces that balance the weight, the loads and the inertia of
+//! the motion the blocks start (d'Alembert): those of a joint that holds, and of one
+//! that slides (friction at its limit, the normal force of the accelerated blocks).
+//! The steps go on until every vertex moves in a step as it moved in the step before
+//! (settled, or sliding steadily) to [`SETTLE_TOLERANCE`] of the first step's motion,
+//! until that stops improving ([`SETTLE_STALL`]), or for [`SETTLE_MAX_STEPS`]. Blocks
+//! that rest on nothing (in flight) are held where they are; the ground is still. The
+//! run then starts from the settled places, stresses and contacts (their springs loaded,
+//! shear springs anchored where they were) with the blocks' own velocities. The work
+//! gravity and the loads did while settling is added to the energy the physics guard
+//! counts as supplied. A block free to slide moves by its first steps' slide while
+//! settling, a dt^2 / 2 a step (a its acceleration).
+//!
+//! Holding every joint while settling (a static solution of glued blocks, our first
+//! design) is wrong where the scene's joints cannot hold: it loads them with shear they
+//! do not carry in the run, a column that would topple glued starts the run on its toe,
+//! and an equilibrium reached with no joint at its limit creeps once the limits apply
+//! (docs/method.md, section 13).
 
 use crate::diagnosis::SimError;
 use crate::model::supported_blocks;
-use crate::scene::{Integration, JointProps, Mode};
+use crate::scene::{Integration, Mode};
 use crate::simulation::{RunOptions, Simulation};
 use dda_contact::BlockShape;
+use dda_geom::DVec2;
 
-/// tan(phi) of every joint while settling.
-const SETTLE_FRICTION: f64 = 1e3;
+/// Most static steps of the settling.
+const SETTLE_MAX_STEPS: u32 = 200;
 
-/// Static steps of the settling.
-const SETTLE_STEPS: u32 = 3;
+/// The settling has converged when no vertex's motion in a step differs from its motion
+/// in the step before by more than this share of the first step's largest motion. Our
+/// choice: the toppling columns of `tests/physics/regions.rs` (friction 5 degrees above
+/// the limit) stand to 0.24 mm at 1e-3 (40 steps); stopped at 10 steps, with their
+/// joints' friction mobilised but not converged, they crept 5.6 mm in 2 s.
+const SETTLE_TOLERANCE: f64 = 1e-3;
 
-/// The inertia of a static step, 2 m / dt^2, is at most this share of the normal penalty
-/// for the heaviest block while settling: the step then comes within that share of the
-/// equilibrium.
-const SETTLE_INERTIA: f64 = 1e-6;
+/// Steps without progress after which the settling stops: the change of the motion has
+/// not fallen below half its smallest value so far. A stack sliding steadily reaches a
+/// floor of it (contacts at their friction limit locking and sliding in turn change the
+/// motion by 2% from step to step) and stops there, rather than slide on.
+const SETTLE_STALL: u32 = 10;
+
+/// The inertia of a settling step, 2 m / dt^2 for the heaviest block, is at most this
+/// share of the normal penalty: the step is the run's own, or longer where that would
+/// take many steps for the springs to carry their load (each step carries the
+/// imbalance down to inertia / (inertia + penalty) of what it was).
+const SETTLE_INERTIA: f64 = 1.0;
 
 impl Simulation {
     /// Settles the blocks at t = 0 (see the module docs), once, before the first step
@@ -67,21 +93,12 @@ impl Simulation {
         }
         let mp = &mut model.params;
         mp.mode = Mode::Static;
-        mp.dt0 = (2.0 * heaviest / (SETTLE_INERTIA * mp.normal_penalty)).sqrt();
-        mp.duration = f64::from(SETTLE_STEPS) * mp.dt0;
+        let shortest = (2.0 * heaviest / (SETTLE_INERTIA * mp.normal_penalty)).sqrt();
+        mp.dt0 = mp.dt0.max(shortest);
+        mp.duration = f64::from(SETTLE_MAX_STEPS) * mp.dt0;
         mp.impact_steps = None;
         mp.integration = Integration::ConstantAcceleration;
         mp.settle = false;
-        for j in &mut model.joints {
-            // Held by friction no load in equilibrium reaches (tan phi = 1e3, 89.94
-            // degrees); the glue between the parts of a body stays.
-            *j = JointProps {
-                tan_phi: SETTLE_FRICTION,
-                cohesion: 0.0,
-                tensile_strength: 0.0,
-                glued: false,
-            };
-        }
         model.ground = None;
         for b in &mut model.bolts {
             // A bolt breaks in the run, not while the blocks settle onto it.
@@ -92,14 +109,51 @@ impl Simulation {
             ..self.options
         };
         let mut settling = Simulation::new(model, options);
+        // Blocks written resting on each other touch along flush faces, where a contact
+        // starts open: closed from the start, they carry their weight in the first step,
+        // where each open-close iteration would otherwise close one more layer of a
+        // stack (the layers above falling with it) and a tall stack runs out of them.
+        settling.close_touching = true;
         let supplied = settling.state.energy.supplied;
-        for _ in 0..SETTLE_STEPS {
+        // Each step's motion of every free vertex; the first step's largest; the
+        // smallest change of the motion from step to step so far, and its step.
+        let mut last: Vec<DVec2> = Vec::new();
+        let mut first = None;
+        let (mut best, mut best_at) = (f64::INFINITY, 0);
+        for n in 1..=SETTLE_MAX_STEPS {
             if settling.finished() {
                 break;
             }
+            let before = settling.free_vertices();
             settling.step().map_err(|e| SimError::Settle {
                 reason: e.to_string(),
             })?;
+            let motion: Vec<DVec2> = settling
+                .free_vertices()
+                .iter()
+                .zip(&before)
+                .map(|(a, b)| *a - *b)
+                .collect();
+            let size = motion.iter().map(|m| m.length()).fold(0.0, f64::max);
+            let scale = *first.get_or_insert(size);
+            let change = if last.is_empty() {
+                f64::INFINITY
+            } else {
+                motion
+                    .iter()
+                    .zip(&last)
+                    .map(|(a, b)| (*a - *b).length())
+                    .fold(0.0, f64::max)
+            };
+            if change <= SETTLE_TOLERANCE * scale {
+                break;
+            }
+            if change <= 0.5 * best {
+                (best, best_at) = (change, n);
+            } else if n - best_at >= SETTLE_STALL {
+                break;
+            }
+            last = motion;
         }
         // The settled places, stresses and contacts; the run's own velocities.
         for (i, (b, settled)) in self
@@ -119,13 +173,11 @@ impl Simulation {
             b.fixed_points = settled.fixed_points;
             self.scratch.shapes[i] = BlockShape::new(&b.polygon);
         }
-        // The settled contacts, their shear springs anchored where they were: a joint
-        // that holds its load goes on holding it (no creep while the shear springs load
-        // again); one that cannot slides from the first step.
+        // The settled contacts, their shear springs anchored where they were and sliding
+        // ones sliding: each joint goes on carrying the force it settled with.
         self.state.contacts = settling.state.contacts;
         for c in &mut self.state.contacts.contacts {
-            // The settling's joints are not the scene's: bonding joints bond at the
-            // first step, and the scene's joints decide every state from there.
+            // Bonding joints bond at the run's first step, as without settling.
             c.bonded = false;
         }
         let work = settling.state.energy.supplied - supplied;
@@ -136,5 +188,19 @@ impl Simulation {
             .supplied_max
             .max(self.state.energy.supplied);
         Ok(())
+    }
+
+    /// The vertices of every free block, block by block.
+    fn free_vertices(&self) -> Vec<DVec2> {
+        self.free_blocks
+            .iter()
+            .flat_map(|&i| {
+                self.state.blocks[i as usize]
+                    .polygon
+                    .vertices()
+                    .iter()
+                    .copied()
+            })
+            .collect()
     }
 }

@@ -54,6 +54,10 @@ pub struct Simulation {
     /// Energy below the model's resolution, added to the guard's reference (see
     /// `guard`): every free block lowered by d_tol, and a spring over the start overlap.
     pub(crate) energy_floor: f64,
+    /// Whether the first step closes every active contact touching to rounding (its
+    /// vertex within the open band of its edge's line, `Simulation::open_band`): set
+    /// for the settling's copy of the model (`settle`).
+    pub(crate) close_touching: bool,
     /// The state at the end of the last step: what a checkpoint saves.
     pub(crate) state: RunState,
     /// Work buffers of a step, reused from step to step, never saved.
@@ -230,6 +234,7 @@ impl Simulation {
             free,
             n_free: n_free as usize,
             energy_floor,
+            close_touching: false,
             state: RunState {
                 t: 0.0,
                 dt: dt0,
