@@ -51,7 +51,7 @@ const SETTLE_TOLERANCE: f64 = 1e-3;
 /// not fallen below half its smallest value so far. A stack sliding steadily reaches a
 /// floor of it (contacts at their friction limit locking and sliding in turn change the
 /// motion by 2% from step to step) and stops there, rather than slide on.
-const SETTLE_STALL: u32 = 10;
+const SETTLE_STALL: u32 = 20;
 
 /// The inertia of a settling step, 2 m / dt^2 for the heaviest block, is at most this
 /// share of the normal penalty: the step is the run's own, or longer where that would
@@ -115,8 +115,10 @@ impl Simulation {
         // stack (the layers above falling with it) and a tall stack runs out of them.
         settling.close_touching = true;
         let supplied = settling.state.energy.supplied;
-        // Each step's motion of every free vertex; the first step's largest; the
-        // smallest change of the motion from step to step so far, and its step.
+        // Each step's motion of every free vertex over dt^2 / 2 (its acceleration from
+        // rest, the same over steps of any size while a block slides steadily, so that
+        // steps cut and grown back compare); the first step's largest; the smallest
+        // change from step to step so far, and its step.
         let mut last: Vec<DVec2> = Vec::new();
         let mut first = None;
         let (mut best, mut best_at) = (f64::INFINITY, 0);
@@ -125,14 +127,15 @@ impl Simulation {
                 break;
             }
             let before = settling.free_vertices();
-            settling.step().map_err(|e| SimError::Settle {
+            let record = settling.step().map_err(|e| SimError::Settle {
                 reason: e.to_string(),
             })?;
+            let per = 2.0 / (record.dt * record.dt);
             let motion: Vec<DVec2> = settling
                 .free_vertices()
                 .iter()
                 .zip(&before)
-                .map(|(a, b)| *a - *b)
+                .map(|(a, b)| (*a - *b) * per)
                 .collect();
             let size = motion.iter().map(|m| m.length()).fold(0.0, f64::max);
             let scale = *first.get_or_insert(size);
