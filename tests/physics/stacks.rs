@@ -94,14 +94,14 @@ fn slides(text: &str, u: DVec2, slope: f64, phi: f64) -> Vec<f64> {
 /// Stacks of 2 to 10 bricks and running-bond walls of 4 x 3, 6 x 4 and 8 x 3 bricks on
 /// inclines past their friction angle (40/30, 35/20, 50/40 and 30/25 degrees), as a
 /// user writes them (no key: settled before the run): every block within 1% of the
-/// closed form after 0.5 s (0.93% the worst measured, the 8 x 3 wall at 30/25; the
-/// columns within 0.78%). The walls' top rows are offset, so that their end bricks
-/// overhang up the slope, where the motion leans them onto the wall: a top brick
-/// overhanging half its length down the slope has its centroid over the corner below it
-/// and topples. Unsettled, the 2-brick stack is more than 1% off (its springs ring from
-/// an unloaded start), so the test fails without settling. Walls this does not yet hold
-/// to 1% (soft penalties at short steps, tall walls with half bricks at the course
-/// ends) are measured in docs/method.md, section 13.
+/// closed form after 0.5 s (0.07% the worst measured, a 9-brick column at 40/30). The
+/// walls' top rows are offset, so that their end bricks overhang up the slope, where the
+/// motion leans them onto the wall: a top brick overhanging half its length down the
+/// slope has its centroid over the corner below it and topples. Unsettled, the 2-brick
+/// stack is more than 1% off (its springs ring from an unloaded start), so the test
+/// fails without settling; with the friction dropped when a contact sticks again (an
+/// unloaded shear spring), the 8 x 3 wall at 30/25 was 0.93% off. Tall walls laid with
+/// half bricks at the course ends are not yet held (docs/method.md, section 13).
 #[test]
 fn stacks_and_walls_slide_as_one_body() {
     for (slope, phi) in [(40.0, 30.0), (35.0, 20.0), (50.0, 40.0), (30.0, 25.0)] {

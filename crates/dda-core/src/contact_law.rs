@@ -15,6 +15,15 @@
 //! forces of 1e-4 of a block's weight and below, and the iteration never ends.
 //! `docs/method.md`, section 6, gives the measurements.
 //!
+//! **A contact that sticks again keeps its friction** (our choice; Shi's code and the
+//! paper lock it with an unloaded shear spring). A sliding contact whose motion reverses
+//! locks with its shear spring anchored so that it carries the friction force the
+//! contact slid against, and unloads from there with the reversal: the force is
+//! continuous through the change, as in elastic-plastic Coulomb friction. Locked
+//! unloaded, a joint held at its friction limit dropped its force to zero each time it
+//! stuck and slid again: the rows of a wall sliding on an incline, whose every bed
+//! joint carries exactly its limit, parted by 1% to 3% (docs/method.md, section 13).
+//!
 //! **Cycles end closed and sliding** (our choice). A contact that changes state more
 //! than [`CYCLE_LIMIT`] times in one attempt of a step alternates with others: its
 //! decision depends on theirs, and both of its states are consistent with some of them
@@ -139,9 +148,22 @@ pub fn decide(
                         if c.slide_dir == 0.0 {
                             n.slide_dir = s.signum();
                         } else if s * c.slide_dir < 0.0 && ps * s.abs() > band {
-                            // The motion reversed against friction: it sticks.
+                            // The motion reversed against friction: it sticks, its shear
+                            // spring anchored behind the point it slid to by the friction
+                            // force over the shear penalty, so that the spring takes up
+                            // the force the contact slid against and unloads with the
+                            // reversal (elastic-plastic Coulomb friction; see the module
+                            // docs). shear(a) is linear in a, falling by the edge's
+                            // length per unit of a.
+                            let r = c.r.clamp(0.0, 1.0);
+                            let length = shear(r) - shear(r + 1.0);
+                            let limit = c.normal_force.max(0.0) * joint.tan_phi;
                             n.state = ContactState::Locked;
-                            n.locked_r = c.r.clamp(0.0, 1.0);
+                            n.locked_r = if length > 0.0 {
+                                r - c.slide_dir * limit / (ps * length)
+                            } else {
+                                r
+                            };
                         }
                     }
                 }
@@ -383,6 +405,43 @@ mod tests {
         assert_eq!(
             decided(&sliding, &j, -1e-6, 0.0, 1e-7).state,
             ContactState::Sliding
+        );
+    }
+
+    /// A contact that sticks again keeps its friction: locked after sliding in +1 against
+    /// the friction force f = N tan(phi), its shear spring at the trial carries -f (the
+    /// friction's direction) less the reversal's own spring force, where locked at its
+    /// projection it would carry the reversal's force alone.
+    #[test]
+    fn a_contact_that_sticks_again_carries_its_friction() {
+        let j = joint(30.0);
+        let normal_force = 5e3;
+        let sliding = Contact {
+            slide_dir: 1.0,
+            normal_force,
+            ..contact(ContactState::Sliding)
+        };
+        // The trial's tangential displacement from the point at ratio a along an edge of
+        // length 2 m, the vertex at ratio 0.5 having moved back by 1e-8 m.
+        let (length, back) = (2.0, -1e-8);
+        let shear = |a: f64| back - (a - 0.5) * length;
+        let d = -normal_force / LAW.normal_penalty;
+        let locked = decide(
+            &sliding,
+            &j,
+            &LAW,
+            Trial { d, band: 0.0 },
+            shear,
+            || 0.5,
+            || 1.0,
+        );
+        assert_eq!(locked.state, ContactState::Locked);
+        let friction = normal_force * j.tan_phi;
+        let force = -LAW.shear_penalty * shear(locked.locked_r);
+        let expected = -friction - LAW.shear_penalty * back;
+        assert!(
+            (force - expected).abs() < 1e-9 * friction,
+            "spring force {force} N, friction {friction} N"
         );
     }
 }
