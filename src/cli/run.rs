@@ -171,20 +171,17 @@ struct Job {
     marks: OutputMarks,
     history: BufWriter<File>,
     frames: BufWriter<File>,
-    /// measurements.csv and bolts.csv, when the scene has measured points or bolts.
-    tables: Tables,
+    /// measurements.csv and bolts.csv ([`TABLES`]), when the scene has measured points
+    /// or bolts.
+    tables: [Option<BufWriter<File>>; 2],
     animation_frames: u64,
     resolution: f64,
     quiet: bool,
 }
 
-/// The per-step tables a scene may call for: measurements.csv (measured points) and
-/// bolts.csv (bolts).
-#[derive(Default)]
-struct Tables {
-    measurements: Option<BufWriter<File>>,
-    bolts: Option<BufWriter<File>>,
-}
+/// The per-step tables a scene may call for, in the order of [`Job::tables`]:
+/// measurements.csv (measured points) and bolts.csv (bolts).
+const TABLES: [&str; 2] = ["measurements.csv", "bolts.csv"];
 
 /// Runs `dda run`.
 pub fn run(args: RunArgs) -> Result<ExitCode, Failure> {
@@ -271,7 +268,9 @@ pub fn resume(args: ResumeArgs) -> Result<ExitCode, Failure> {
             .is_some_and(|s| s.status == "failed");
         if failed && !args.limits.keep_going {
             return Err(bad(format!(
-                "{} is a run that failed (see its summary.json): resumed as it is, it would                  fail the same way; `dda resume {} --keep-going` goes on through a step                  that breaks physics",
+                "{} is a run that failed (see its summary.json): resumed as it is, it would \
+                 fail the same way; `dda resume {} --keep-going` goes on through a step \
+                 that breaks physics",
                 out.display(),
                 out.display()
             )));
@@ -402,7 +401,7 @@ impl Job {
             },
             history,
             frames,
-            tables: Tables::default(),
+            tables: [None, None],
             animation_frames,
             resolution,
             quiet,
@@ -467,18 +466,14 @@ impl Job {
     fn open_tables(&mut self, fresh: bool) -> Result<(), Failure> {
         let model = self.sim.model();
         let wanted = [
-            (
-                !model.measures.is_empty(),
-                "measurements.csv",
-                MEASUREMENTS_HEADER,
-            ),
-            (!model.bolts.is_empty(), "bolts.csv", BOLTS_HEADER),
+            (!model.measures.is_empty(), MEASUREMENTS_HEADER),
+            (!model.bolts.is_empty(), BOLTS_HEADER),
         ];
-        for (k, (want, name, header)) in wanted.into_iter().enumerate() {
+        for (k, (want, header)) in wanted.into_iter().enumerate() {
             if !want {
                 continue;
             }
-            let path = self.work.join(name);
+            let path = self.work.join(TABLES[k]);
             let file = if fresh {
                 let mut w =
                     BufWriter::new(File::create(&path).map_err(|e| output_error(e, &path))?);
@@ -488,16 +483,12 @@ impl Job {
             } else {
                 reopen(&path, *self.table_bytes(k))?
             };
-            if k == 0 {
-                self.tables.measurements = Some(file);
-            } else {
-                self.tables.bolts = Some(file);
-            }
+            self.tables[k] = Some(file);
         }
         Ok(())
     }
 
-    /// The bytes written of table `k` (0: measurements.csv, 1: bolts.csv).
+    /// The bytes written of table `k` of [`TABLES`].
     fn table_bytes(&mut self, k: usize) -> &mut u64 {
         if k == 0 {
             &mut self.marks.measurements_bytes
@@ -510,20 +501,10 @@ impl Job {
     fn write_tables(&mut self) -> Result<(), Failure> {
         let rows = [measurement_rows(&self.sim), bolt_rows(&self.sim)];
         for (k, rows) in rows.into_iter().enumerate() {
-            let name = if k == 0 {
-                "measurements.csv"
-            } else {
-                "bolts.csv"
-            };
-            let path = self.work.join(name);
-            let file = if k == 0 {
-                self.tables.measurements.as_mut()
-            } else {
-                self.tables.bolts.as_mut()
-            };
-            let Some(w) = file else {
+            let Some(w) = self.tables[k].as_mut() else {
                 continue;
             };
+            let path = self.work.join(TABLES[k]);
             let mut bytes = 0;
             for r in rows {
                 writeln!(w, "{r}").map_err(|e| output_error(e, &path))?;
@@ -569,15 +550,13 @@ impl Job {
 
     /// Flushes history.csv and frames.jsonl, and with `sync` forces them to disk.
     fn flush(&mut self, sync: bool) -> Result<(), Failure> {
-        let tables = [
-            (self.tables.measurements.as_mut(), "measurements.csv"),
-            (self.tables.bolts.as_mut(), "bolts.csv"),
-        ];
         let mut files: Vec<(&mut BufWriter<File>, &str)> = vec![
             (&mut self.history, "history.csv"),
             (&mut self.frames, "frames.jsonl"),
         ];
-        files.extend(tables.into_iter().filter_map(|(w, n)| w.map(|w| (w, n))));
+        for (w, name) in self.tables.iter_mut().zip(TABLES) {
+            files.extend(w.as_mut().map(|w| (w, name)));
+        }
         for (w, name) in files {
             let path = self.work.join(name);
             w.flush().map_err(|e| output_error(e, &path))?;

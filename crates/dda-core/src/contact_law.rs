@@ -144,7 +144,8 @@ pub fn decide(
                             n.bonded = false;
                         }
                     } else {
-                        let s = shear(c.r.clamp(0.0, 1.0));
+                        let r = c.r.clamp(0.0, 1.0);
+                        let s = shear(r);
                         if c.slide_dir == 0.0 {
                             n.slide_dir = s.signum();
                         } else if s * c.slide_dir < 0.0 && ps * s.abs() > band {
@@ -155,8 +156,7 @@ pub fn decide(
                             // reversal (elastic-plastic Coulomb friction; see the module
                             // docs). shear(a) is linear in a, falling by the edge's
                             // length per unit of a.
-                            let r = c.r.clamp(0.0, 1.0);
-                            let length = shear(r) - shear(r + 1.0);
+                            let length = s - shear(r + 1.0);
                             let limit = c.normal_force.max(0.0) * joint.tan_phi;
                             n.state = ContactState::Locked;
                             n.locked_r = if length > 0.0 {

@@ -6,10 +6,11 @@
 //!   penalty is too soft for the motion, or a contact was lost.
 //! - **Energy.** The mechanical energy (kinetic plus elastic strain) never exceeds what
 //!   the scene supplied, its initial kinetic and strain energy plus the work that
-//!   gravity, point loads, bolts and a moving ground have done since, by more than [`ENERGY_TOLERANCE`] of a
-//!   reference: the largest supply so far plus the energy the model cannot resolve
-//!   (every free block lowered by d_tol under gravity, and a contact spring pressed by
-//!   the overlap validation allows at the start, 1e-9 of the block's size). Contact
+//!   gravity, point loads, bolts and a moving ground have done since, by more than
+//!   [`ENERGY_TOLERANCE`] of a reference: the largest supply so far plus the energy
+//!   the model cannot resolve (every free block lowered by d_tol under gravity, and a
+//!   contact spring pressed by the overlap validation allows at the start, 1e-9 of the
+//!   block's size). Contact
 //!   and fixed-point springs store energy and friction dissipates it, so neither can
 //!   make the balance rise; only a numerical fault can (a lost contact releasing a
 //!   compressed spring, a step far beyond the motion's scale).

@@ -225,7 +225,7 @@ impl Scene {
         }
         glue_seams(&mut blocks, self);
         let ground = self.ground_motion(&params, &mut blocks)?;
-        let mut drift = ground.as_ref().and_then(|g| {
+        let drift = ground.as_ref().and_then(|g| {
             let (end, peak) = g.end_and_peak_velocity();
             (end.length() > GROUND_DRIFT * peak).then(|| {
                 invalid(
@@ -260,7 +260,7 @@ impl Scene {
         check_start_overlaps(&blocks)?;
         let mut warnings = unit_slips(self);
         warnings.append(&mut unused);
-        warnings.extend(drift.take());
+        warnings.extend(drift);
         if params.integration == Integration::AverageAcceleration && params.impact_steps.is_none() {
             warnings.push(invalid(
                 "analysis.integration",
@@ -573,8 +573,8 @@ pub(crate) fn start_overlap(a: &ConvexPolygon, b: &ConvexPolygon) -> f64 {
 }
 
 /// In a static analysis every free block must rest, through blocks within d_tol of each
-/// other or tied by bolts, on a fixed block or a fixed point: a free-floating block has no equilibrium
-/// (the classic static DDA matrix is singular for it).
+/// other or tied by bolts, on a fixed block or a fixed point: a free-floating block has
+/// no equilibrium (the classic static DDA matrix is singular for it).
 fn check_static_support(
     blocks: &[ModelBlock],
     d_tol: f64,

@@ -256,8 +256,9 @@ pub struct Analysis {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub integration: Option<Integration>,
     /// Settle a dynamic analysis before it starts: the blocks resting on each other
-    /// load their contacts under gravity and loads, joints held, so that the run starts
-    /// from loaded contacts rather than unloaded ones that ring; default true.
+    /// load their contacts under gravity and loads, under the scene's own joints, so
+    /// that the run starts from the forces of its first instant rather than from
+    /// unloaded contacts that ring; default true.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub settle: Option<bool>,
 }
@@ -624,7 +625,6 @@ impl Scene {
     }
 }
 
-/// `serde_path_to_error`'s path as `a.b[3].c`.
 /// The text of the regular file at `path` if it holds at most `limit` bytes of UTF-8;
 /// else why not, as the end of a sentence naming the file.
 fn read_limited(path: &Path, limit: u64) -> Result<String, String> {
@@ -644,6 +644,7 @@ fn read_limited(path: &Path, limit: u64) -> Result<String, String> {
     String::from_utf8(bytes).map_err(|_| "is not UTF-8 text".into())
 }
 
+/// `serde_path_to_error`'s path as `a.b[3].c`.
 fn path_string(path: &serde_path_to_error::Path) -> String {
     use serde_path_to_error::Segment;
     let mut s = String::new();
