@@ -367,7 +367,24 @@ fn reopen(path: &Path, len: u64) -> Result<BufWriter<File>, Failure> {
 /// frames; fewer frames for larger models keep report.html to a few megabytes and the
 /// run folder small. Measured on the 826-block column (31 frames recorded): report.html
 /// 1.18 MB and the run folder 6.4 MB, against 1.83 and 9.2 MB at 500,000 (51 frames).
+/// Models of up to 15,000 numbers a frame (about 1,000 blocks) keep at least 20 frames.
 const ANIMATION_BUDGET: usize = 300_000;
+
+/// Most numbers the animation holds however few frames that leaves (down to its first
+/// and last): about 3 MB of report.html at the 2.2 bytes a number measured on the
+/// 10,131-block column (a frame of 121,000 numbers packed into 270 kB), so 12 frames
+/// there and 2 at 100,000 blocks.
+const ANIMATION_CAP: usize = 1_500_000;
+
+/// How many intervals of the run the animation records (plus its first instant):
+/// ANIMATION_BUDGET numbers, at least 20 intervals and at most 200, and never more than
+/// ANIMATION_CAP numbers unless that leaves fewer than one interval.
+fn animation_intervals(per_frame: usize) -> u64 {
+    let per_frame = per_frame.max(1);
+    let wanted = (ANIMATION_BUDGET / per_frame).clamp(20, 200);
+    let most = (ANIMATION_CAP / per_frame).saturating_sub(1).max(1);
+    wanted.min(most) as u64
+}
 
 impl Job {
     fn new(
@@ -384,7 +401,7 @@ impl Job {
         let vertices: usize = sim.blocks().iter().map(|b| b.polygon.len()).sum();
         let per_block = if sim.effects().elasticity { 4 } else { 1 };
         let per_frame = 2 * vertices + per_block * sim.blocks().len();
-        let animation_frames = (ANIMATION_BUDGET / per_frame.max(1)).clamp(20, 200) as u64;
+        let animation_frames = animation_intervals(per_frame);
         let resolution = frame_resolution(&frame_view(sim.model()));
         Job {
             scene,
@@ -737,4 +754,31 @@ enum End {
     Stopped(String),
     /// A signal arrived.
     Signal(i32),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The animation's frames (its intervals and first instant) hold at most
+    /// ANIMATION_CAP numbers unless only the first and last are left, at least 21 frames
+    /// while the budget allows, and more frames for smaller models.
+    #[test]
+    fn the_animation_keeps_to_its_budget_and_cap() {
+        let mut last = u64::MAX;
+        for per_frame in (1..2_000).map(|k| k * 1_000).chain([1, 7, 3_000_000]) {
+            let n = animation_intervals(per_frame);
+            let numbers = (n as usize + 1) * per_frame;
+            assert!(n >= 1, "{per_frame}");
+            assert!(numbers <= ANIMATION_CAP || n == 1, "{per_frame}: {n}");
+            if 21 * per_frame <= ANIMATION_CAP {
+                assert!(n >= 20, "{per_frame}: {n}");
+            }
+            if per_frame >= 1_000 && per_frame < 3_000_000 {
+                assert!(n <= last, "{per_frame}: {n} after {last}");
+                last = n;
+            }
+        }
+        assert_eq!(animation_intervals(1), 200);
+    }
 }
