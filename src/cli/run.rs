@@ -774,7 +774,7 @@ mod tests {
             if 21 * per_frame <= ANIMATION_CAP {
                 assert!(n >= 20, "{per_frame}: {n}");
             }
-            if per_frame >= 1_000 && per_frame < 3_000_000 {
+            if (1_000..3_000_000).contains(&per_frame) {
                 assert!(n <= last, "{per_frame}: {n} after {last}");
                 last = n;
             }
