@@ -367,7 +367,6 @@ fn reopen(path: &Path, len: u64) -> Result<BufWriter<File>, Failure> {
 /// frames; fewer frames for larger models keep report.html to a few megabytes and the
 /// run folder small. Measured on the 826-block column (31 frames recorded): report.html
 /// 1.18 MB and the run folder 6.4 MB, against 1.83 and 9.2 MB at 500,000 (51 frames).
-/// Models of up to 15,000 numbers a frame (about 1,000 blocks) keep at least 20 frames.
 const ANIMATION_BUDGET: usize = 300_000;
 
 /// Most numbers the animation holds however few frames that leaves (down to its first
