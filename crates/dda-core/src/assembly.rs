@@ -13,7 +13,7 @@ use crate::solver::{BlockSystem, Entry};
 use crate::springs::{HalfStep, Row, contact_length, normal_row, shear_row};
 use crate::state::{BlockState, StepRecord};
 use crate::timing::{Phase, Stopwatch};
-use dda_contact::{BlockShape, ContactSet, ContactState};
+use dda_contact::{BlockShape, Contact, ContactSet, ContactState};
 use dda_geom::DVec2;
 
 /// Fewest free blocks for which per-block terms are computed on the thread pool (when
@@ -37,21 +37,78 @@ pub(crate) struct Spring {
 }
 
 impl Spring {
-    /// Its row in the attempt whose contact rows are `rows` (see
-    /// [`Simulation::spring_row`]).
+    /// Its row in the attempt whose contact rows are `rows` and whose shear rows made so
+    /// far are `sheared` (see [`Simulation::spring_row`]).
     #[inline]
     pub(crate) fn row(
         &self,
         rows: &[Row],
+        sheared: &ShearRows,
         set: &ContactSet,
         shapes: &[BlockShape],
         half: &[HalfStep],
     ) -> Row {
         let k = self.contact as usize;
         if self.shear {
-            shear_row(&set.contacts[k], shapes, half, self.anchor)
+            sheared.row(k, self.anchor, &set.contacts[k], shapes, half)
         } else {
             rows[k]
+        }
+    }
+}
+
+/// The shear rows of one OCI iteration's contact states, by contact: each locked
+/// contact's at its locked point and each sliding one's at its ratio, made once by
+/// [`Simulation::collect_springs`] and read by the assembly, the low-rank changes and
+/// the contact law (a shear row is a third of the work of a wall's step when made at
+/// each use). The same function on the same geometry: the same bits as made anew.
+#[derive(Debug, Default)]
+pub(crate) struct ShearRows {
+    /// Per contact: its entry in `rows`, or `u32::MAX`.
+    at: Vec<u32>,
+    /// The anchor each row was made at, and the row.
+    rows: Vec<(f64, Row)>,
+}
+
+impl ShearRows {
+    /// Forgets every row, for a set of `contacts` contacts.
+    fn clear(&mut self, contacts: usize) {
+        self.at.clear();
+        self.at.resize(contacts, u32::MAX);
+        self.rows.clear();
+    }
+
+    /// Makes contact `k`'s shear row at `anchor` and keeps it.
+    fn make(
+        &mut self,
+        k: usize,
+        anchor: f64,
+        c: &Contact,
+        shapes: &[BlockShape],
+        half: &[HalfStep],
+    ) -> Row {
+        let row = shear_row(c, shapes, half, anchor);
+        if let Some(at) = self.at.get_mut(k) {
+            *at = self.rows.len() as u32;
+            self.rows.push((anchor, row));
+        }
+        row
+    }
+
+    /// Contact `k`'s shear row at `anchor`: the one kept if it was made at that anchor,
+    /// else made anew (not kept).
+    #[inline]
+    pub(crate) fn row(
+        &self,
+        k: usize,
+        anchor: f64,
+        c: &Contact,
+        shapes: &[BlockShape],
+        half: &[HalfStep],
+    ) -> Row {
+        match self.at.get(k).and_then(|&i| self.rows.get(i as usize)) {
+            Some((a, row)) if a.to_bits() == anchor.to_bits() => *row,
+            _ => shear_row(c, shapes, half, anchor),
         }
     }
 }
@@ -158,6 +215,9 @@ impl Simulation {
     pub(crate) fn collect_springs(&mut self) {
         self.scratch.springs.clear();
         self.scratch.forces.clear();
+        self.scratch
+            .sheared
+            .clear(self.state.contacts.contacts.len());
         let p = &self.model.params;
         let (pn, ps) = (p.normal_penalty, p.shear_penalty);
         for (pk, pc) in self.state.contacts.pairs.iter().enumerate() {
@@ -181,6 +241,8 @@ impl Simulation {
                 }
                 match c.state {
                     ContactState::Locked => {
+                        let (shapes, half) = (&self.scratch.shapes, &self.scratch.half);
+                        self.scratch.sheared.make(k, c.locked_r, &c, shapes, half);
                         self.scratch.springs.push(Spring {
                             contact,
                             shear: true,
@@ -194,12 +256,11 @@ impl Simulation {
                         if c.bonded {
                             limit += j.cohesion * contact_length(&c, &self.scratch.shapes);
                         }
-                        let row = shear_row(
-                            &c,
-                            &self.scratch.shapes,
-                            &self.scratch.half,
-                            c.r.clamp(0.0, 1.0),
-                        );
+                        let (shapes, half) = (&self.scratch.shapes, &self.scratch.half);
+                        let row =
+                            self.scratch
+                                .sheared
+                                .make(k, c.r.clamp(0.0, 1.0), &c, shapes, half);
                         self.scratch
                             .forces
                             .push((contact, -c.slide_dir * limit, row));
@@ -217,6 +278,7 @@ impl Simulation {
     pub(crate) fn spring_row(&self, s: &Spring) -> Row {
         s.row(
             &self.scratch.rows,
+            &self.scratch.sheared,
             &self.state.contacts,
             &self.scratch.shapes,
             &self.scratch.half,

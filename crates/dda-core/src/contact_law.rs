@@ -46,7 +46,7 @@ use crate::simulation::Simulation;
 /// of the lighter block's weight.
 pub(crate) const DECISION_BAND: f64 = 1e-3;
 use crate::scene::JointProps;
-use crate::springs::{contact_length, contact_points, shear_row};
+use crate::springs::{contact_length, contact_points};
 use dda_contact::{Contact, ContactState};
 use dda_geom::{DVec2, VertexEdge};
 
@@ -225,6 +225,7 @@ impl Simulation {
             }
             let key = c.key;
             let (shapes, half, d) = (&self.scratch.shapes, &self.scratch.half, &self.scratch.d);
+            let sheared = &self.scratch.sheared;
             let trial = Trial {
                 d: self.scratch.rows[k].eval(d),
                 // The force below which a change is negligible (see the module docs).
@@ -239,7 +240,7 @@ impl Simulation {
                     &joint,
                     &law,
                     trial,
-                    |anchor| shear_row(&c, shapes, half, anchor).eval(d),
+                    |anchor| sheared.row(k, anchor, &c, shapes, half).eval(d),
                     || self.trial_ratio(&c),
                     // Only bonds need the length: looked up (a load from the edge block's
                     // shape, often a cache miss) only for them.

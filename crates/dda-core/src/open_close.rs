@@ -136,8 +136,9 @@ impl Simulation {
         let (now, then) = (&self.scratch.springs, &self.scratch.factored_springs);
         let (mut i, mut j) = (0, 0);
         let free = &self.free;
-        let (rows, set, shapes, half) = (
+        let (rows, sheared, set, shapes, half) = (
             &self.scratch.rows,
+            &self.scratch.sheared,
             &self.state.contacts,
             &self.scratch.shapes,
             &self.scratch.half,
@@ -146,7 +147,7 @@ impl Simulation {
         // A spring added (sign 1) or removed (-1): its stiffness p c c^T and its
         // right-hand side -p g0 c.
         let mut change = |s: &Spring, sign: f64| {
-            let row = s.row(rows, set, shapes, half);
+            let row = s.row(rows, sheared, set, shapes, half);
             let blocks = [free[row.blocks[0] as usize], free[row.blocks[1] as usize]];
             let p = sign * s.penalty;
             changes.push(RankOne {

@@ -11,7 +11,7 @@
 //! `time_step`, `guard`, `update`; `state` holds what a checkpoint saves and
 //! `diagnosis` why a run stops. `docs/method.md` states the formulation.
 
-use crate::assembly::Spring;
+use crate::assembly::{ShearRows, Spring};
 use crate::detection::NEIGHBOUR_SKIN;
 use crate::diagnosis::{Diagnosis, SimError};
 use crate::effects::Effects;
@@ -86,6 +86,8 @@ pub(crate) struct Scratch {
     /// placeholder until it becomes active: only active contacts' rows are read).
     pub(crate) rows: Vec<Row>,
     pub(crate) springs: Vec<Spring>,
+    /// The shear rows of the springs' and friction forces' contact states.
+    pub(crate) sheared: ShearRows,
     /// Friction forces in effect: contact, magnitude, row.
     pub(crate) forces: Vec<(u32, f64, Row)>,
     pub(crate) factored_springs: Vec<Spring>,
@@ -267,6 +269,7 @@ impl Simulation {
                 half: Vec::with_capacity(n),
                 rows: Vec::new(),
                 springs: Vec::new(),
+                sheared: ShearRows::default(),
                 forces: Vec::new(),
                 factored_springs: Vec::new(),
                 factored_forces: Vec::new(),
