@@ -600,6 +600,12 @@ impl Job {
     /// checkpoint and leaves the run in its staging folder for `dda resume`; otherwise
     /// writes the summary and the report and moves the outputs into place.
     fn drive(&mut self) -> Result<ExitCode, Failure> {
+        // The settling takes static steps before t = 0 inside the first step: say so,
+        // and afterwards what it took, so that a large model's wait is explained.
+        let mut settling = self.sim.settles().then(std::time::Instant::now);
+        if settling.is_some() && !self.quiet {
+            eprintln!("settling: static steps onto the contacts before t = 0 (analysis.settle)");
+        }
         let bar = if !self.quiet && std::io::stderr().is_terminal() {
             let bar = ProgressBar::new(1000);
             bar.set_style(
@@ -633,6 +639,25 @@ impl Job {
             }
             match self.sim.step() {
                 Ok(rec) => {
+                    if let Some(started) = settling.take()
+                        && let Some(done) = self.sim.settling()
+                        && !self.quiet
+                    {
+                        let line = format!(
+                            "settled in {} static steps{} ({:.3} s with the first step)",
+                            done.steps,
+                            if done.converged {
+                                ""
+                            } else {
+                                ", stopped without converging"
+                            },
+                            started.elapsed().as_secs_f64()
+                        );
+                        match &bar {
+                            Some(bar) => bar.println(line),
+                            None => eprintln!("{line}"),
+                        }
+                    }
                     self.write_history(&history_row(&rec))?;
                     self.write_tables()?;
                     self.sample_frames()?;

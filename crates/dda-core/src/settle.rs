@@ -67,18 +67,44 @@ const SETTLE_STALL: u32 = 200;
 /// imbalance down to inertia / (inertia + penalty) of what it was).
 const SETTLE_INERTIA: f64 = 1.0;
 
+/// What the settling did before t = 0 ([`Simulation::settling`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Settling {
+    /// Static steps taken.
+    pub steps: u32,
+    /// Whether the motion converged (every vertex moving as in the step before, to 1e-5
+    /// of the first step's motion); if not, the settling stopped after 200 steps
+    /// without progress, or at its most steps, 2,000 (docs/method.md section 13).
+    pub converged: bool,
+}
+
 impl Simulation {
-    /// Settles the blocks at t = 0 (see the module docs), once, before the first step
-    /// of a dynamic run whose scene asks for it and has something to settle.
-    pub(crate) fn settle(&mut self) -> Result<(), SimError> {
-        self.state.settled = true;
+    /// Whether the next step begins by settling the blocks (see the module docs): the
+    /// scene asks for it (`analysis.settle`), contacts are on, something pulls the blocks
+    /// (gravity, loads, bolt pretension), and it has not been done.
+    pub fn settles(&self) -> bool {
         let p = &self.model.params;
         let pulled = p.gravity.is_some_and(|g| g != glam::DVec2::ZERO)
             || self.model.blocks.iter().any(|b| !b.loads.is_empty())
             || self.model.bolts.iter().any(|b| b.pretension != 0.0);
-        if !p.settle || !self.effects.contact || !pulled {
+        !self.state.settled && p.settle && self.effects.contact && pulled
+    }
+
+    /// What the settling of this process did, once it has settled the blocks (None
+    /// before, without settling, and after a resume).
+    pub fn settling(&self) -> Option<Settling> {
+        self.settling
+    }
+
+    /// Settles the blocks at t = 0 (see the module docs), once, before the first step
+    /// of a dynamic run whose scene asks for it and has something to settle.
+    pub(crate) fn settle(&mut self) -> Result<(), SimError> {
+        let settles = self.settles();
+        self.state.settled = true;
+        if !settles {
             return Ok(());
         }
+        let p = &self.model.params;
         let mut model = self.model.clone();
         let tied: Vec<(usize, usize)> = model
             .bolts
@@ -135,10 +161,15 @@ impl Simulation {
         let mut last: Vec<DVec2> = Vec::new();
         let mut first = None;
         let (mut best, mut best_at) = (f64::INFINITY, 0);
+        let mut report = Settling {
+            steps: 0,
+            converged: false,
+        };
         for n in 1..=SETTLE_MAX_STEPS {
             if settling.finished() {
                 break;
             }
+            report.steps = n;
             let before = settling.free_vertices();
             let record = settling.step().map_err(|e| SimError::Settle {
                 reason: e.to_string(),
@@ -162,6 +193,7 @@ impl Simulation {
                     .fold(0.0, f64::max)
             };
             if change <= SETTLE_TOLERANCE * scale {
+                report.converged = true;
                 break;
             }
             if change <= 0.5 * best {
@@ -201,6 +233,7 @@ impl Simulation {
                 self.state.contacts.contacts[k].bonded = false;
             }
         }
+        self.settling = Some(report);
         let work = settling.state.energy.supplied - supplied;
         self.state.energy.supplied += work;
         self.state.energy.supplied_max = self

@@ -18,6 +18,7 @@ use crate::effects::Effects;
 use crate::guard::{self, EnergyBalance, Violation};
 use crate::kinematics::{Mat6, Vec6, mass_matrix};
 use crate::scene::Model;
+use crate::settle::Settling;
 use crate::solver::{BlockSystem, Entry, RankOne, SolverCounters};
 use crate::springs::{HalfStep, Row};
 use crate::state::{BlockState, RunState, StepRecord, Totals};
@@ -58,6 +59,8 @@ pub struct Simulation {
     /// vertex within the open band of its edge's line, `Simulation::open_band`): set
     /// for the settling's copy of the model (`settle`).
     pub(crate) close_touching: bool,
+    /// What this process's settling did (see `settle`).
+    pub(crate) settling: Option<Settling>,
     /// The state at the end of the last step: what a checkpoint saves.
     pub(crate) state: RunState,
     /// Work buffers of a step, reused from step to step, never saved.
@@ -237,6 +240,7 @@ impl Simulation {
             n_free: n_free as usize,
             energy_floor,
             close_touching: false,
+            settling: None,
             state: RunState {
                 t: 0.0,
                 dt: dt0,
