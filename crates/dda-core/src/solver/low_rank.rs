@@ -18,7 +18,8 @@ impl BlockSystem {
     /// L^-1 F is kept from the factorisation; each L^-1 u is a forward sweep along the
     /// path of u's blocks in the elimination tree, done once per factorisation and kept
     /// with its products with the other kept columns, so a row that stays in the lists
-    /// from one call to the next costs nothing more. One backward sweep ends the solve.
+    /// from one call to the next costs nothing more. The right-hand side's changes along no
+    /// kept column are summed and swept forward once; one backward sweep ends the solve.
     /// Returns false when there is no valid factor or C is numerically singular: the
     /// caller then assembles and factorises.
     pub fn solve_low_rank(&mut self, terms: &[RankOne], rhs_terms: &[RankOne]) -> bool {
@@ -36,7 +37,7 @@ impl BlockSystem {
         // Columns of W: reuse those already swept, sweep the new ones.
         self.term_col.clear();
         let first_new = self.z_rows.len();
-        for t in terms.iter().chain(rhs_terms) {
+        for t in terms {
             let key = (t.blocks, t.c);
             let col = match self.z_rows.iter().position(|r| *r == key) {
                 Some(col) => col,
@@ -95,13 +96,39 @@ impl BlockSystem {
                 }
             }
         }
-        // h = L^-1 F + sum g L^-1 v.
+        // h = L^-1 F + sum g L^-1 v. A change of the right-hand side along a kept column
+        // (a spring's, beside its change of the matrix) is added from it; the others (the
+        // friction forces, which change with their contacts' normal forces in almost
+        // every iteration) are summed and swept forward once: as columns of W, each with
+        // its products with every other, they were two thirds of a sliding wall's solve.
         self.rhs.copy_from_slice(&self.h0);
-        let k = terms.len();
-        for (t, &col) in rhs_terms.iter().zip(&self.term_col[k..]) {
-            let rows = factor.path_rows(path(&self.paths, &self.path_start, col));
-            axpy_over(rows, t.s, &self.z[col * n..(col + 1) * n], &mut self.rhs);
+        let mut delta = std::mem::take(&mut self.delta);
+        delta.clear();
+        for t in rhs_terms {
+            let key = (t.blocks, t.c);
+            if let Some(col) = self.z_rows.iter().position(|r| *r == key) {
+                let rows = factor.path_rows(path(&self.paths, &self.path_start, col));
+                axpy_over(rows, t.s, &self.z[col * n..(col + 1) * n], &mut self.rhs);
+                continue;
+            }
+            delta.resize(n, 0.0);
+            for (b, c) in t.blocks.iter().zip(&t.c) {
+                if let Some(b) = b {
+                    let p = self.pos[*b as usize] as usize * self.nd;
+                    for (v, x) in delta[p..p + self.nd].iter_mut().zip(c) {
+                        *v += t.s * x;
+                    }
+                }
+            }
         }
+        if !delta.is_empty() {
+            factor.forward(&mut delta, &mut g);
+            for (r, d) in self.rhs.iter_mut().zip(&delta) {
+                *r += d;
+            }
+        }
+        self.delta = delta;
+        let k = terms.len();
 
         // C = S^-1 + W^T W and W^T h.
         self.cap.clear();

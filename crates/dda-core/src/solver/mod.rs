@@ -145,6 +145,8 @@ pub struct BlockSystem {
     pub(super) h0: Vec<f64>,
     /// Per term of the current low-rank solve: its column in `z`.
     pub(super) term_col: Vec<usize>,
+    /// The right-hand side's changes of a low-rank solve, then L^-1 of them.
+    pub(super) delta: Vec<f64>,
     /// The capacitance matrix (row-major) and its right-hand side, then solution.
     pub(super) cap: Vec<f64>,
     pub(super) cap_rhs: Vec<f64>,
@@ -194,6 +196,7 @@ impl Default for BlockSystem {
             gram: Vec::new(),
             h0: Vec::new(),
             term_col: Vec::new(),
+            delta: Vec::new(),
             cap: Vec::new(),
             cap_rhs: Vec::new(),
             counters: SolverCounters::default(),
