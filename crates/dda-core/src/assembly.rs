@@ -57,11 +57,12 @@ impl Spring {
     }
 }
 
-/// The shear rows of one OCI iteration's contact states, by contact: each locked
-/// contact's at its locked point and each sliding one's at its ratio, made once by
-/// [`Simulation::collect_springs`] and read by the assembly, the low-rank changes and
-/// the contact law (a shear row is a third of the work of a wall's step when made at
-/// each use). The same function on the same geometry: the same bits as made anew.
+/// The shear rows of an attempt's contact states, by contact: each locked contact's at
+/// its locked point and each sliding one's at its ratio, made by
+/// [`Simulation::collect_springs`] when a contact's anchor is new to the attempt, and
+/// read by the assembly, the low-rank changes and the contact law (a shear row was a
+/// tenth of a wall's step when made at each use). The geometry is the attempt's
+/// ([`Simulation::linearise`] forgets them): the same bits as made anew.
 #[derive(Debug, Default)]
 pub(crate) struct ShearRows {
     /// Per contact: its entry in `rows`, or `u32::MAX`.
@@ -71,14 +72,14 @@ pub(crate) struct ShearRows {
 }
 
 impl ShearRows {
-    /// Forgets every row, for a set of `contacts` contacts.
-    fn clear(&mut self, contacts: usize) {
+    /// Forgets every row (a new attempt's geometry).
+    fn clear(&mut self) {
         self.at.clear();
-        self.at.resize(contacts, u32::MAX);
         self.rows.clear();
     }
 
-    /// Makes contact `k`'s shear row at `anchor` and keeps it.
+    /// Contact `k`'s shear row at `anchor`: the one kept if it was made at that anchor,
+    /// else made and kept (in place of one at another anchor).
     fn make(
         &mut self,
         k: usize,
@@ -87,12 +88,22 @@ impl ShearRows {
         shapes: &[BlockShape],
         half: &[HalfStep],
     ) -> Row {
-        let row = shear_row(c, shapes, half, anchor);
-        if let Some(at) = self.at.get_mut(k) {
-            *at = self.rows.len() as u32;
-            self.rows.push((anchor, row));
+        if self.at.len() <= k {
+            self.at.resize(k + 1, u32::MAX);
         }
-        row
+        match self.rows.get_mut(self.at[k] as usize) {
+            Some((a, row)) if a.to_bits() == anchor.to_bits() => *row,
+            Some(kept) => {
+                *kept = (anchor, shear_row(c, shapes, half, anchor));
+                kept.1
+            }
+            None => {
+                let row = shear_row(c, shapes, half, anchor);
+                self.at[k] = self.rows.len() as u32;
+                self.rows.push((anchor, row));
+                row
+            }
+        }
     }
 
     /// Contact `k`'s shear row at `anchor`: the one kept if it was made at that anchor,
@@ -189,6 +200,7 @@ impl Simulation {
     /// normal rows, linearised there (see `springs`).
     pub(crate) fn linearise(&mut self, dt: f64) {
         self.scratch.half.clear();
+        self.scratch.sheared.clear();
         let ground = self.ground_step(dt);
         for (i, s) in self.scratch.shapes.iter().enumerate() {
             self.scratch.half.push(match (self.free[i], ground) {
@@ -215,9 +227,7 @@ impl Simulation {
     pub(crate) fn collect_springs(&mut self) {
         self.scratch.springs.clear();
         self.scratch.forces.clear();
-        self.scratch
-            .sheared
-            .clear(self.state.contacts.contacts.len());
+
         let p = &self.model.params;
         let (pn, ps) = (p.normal_penalty, p.shear_penalty);
         for (pk, pc) in self.state.contacts.pairs.iter().enumerate() {
