@@ -78,6 +78,13 @@ impl ShearRows {
         self.rows.clear();
     }
 
+    /// Contact `k`'s row kept at `anchor`, if one is.
+    #[inline]
+    fn kept(&self, k: usize, anchor: f64) -> Option<&Row> {
+        let (a, row) = self.rows.get(*self.at.get(k)? as usize)?;
+        (a.to_bits() == anchor.to_bits()).then_some(row)
+    }
+
     /// Contact `k`'s shear row at `anchor`: the one kept if it was made at that anchor,
     /// else made and kept (in place of one at another anchor).
     fn make(
@@ -88,22 +95,21 @@ impl ShearRows {
         shapes: &[BlockShape],
         half: &[HalfStep],
     ) -> Row {
+        if let Some(row) = self.kept(k, anchor) {
+            return *row;
+        }
+        let row = shear_row(c, shapes, half, anchor);
         if self.at.len() <= k {
             self.at.resize(k + 1, u32::MAX);
         }
         match self.rows.get_mut(self.at[k] as usize) {
-            Some((a, row)) if a.to_bits() == anchor.to_bits() => *row,
-            Some(kept) => {
-                *kept = (anchor, shear_row(c, shapes, half, anchor));
-                kept.1
-            }
+            Some(kept) => *kept = (anchor, row),
             None => {
-                let row = shear_row(c, shapes, half, anchor);
                 self.at[k] = self.rows.len() as u32;
                 self.rows.push((anchor, row));
-                row
             }
         }
+        row
     }
 
     /// Contact `k`'s shear row at `anchor`: the one kept if it was made at that anchor,
@@ -117,10 +123,9 @@ impl ShearRows {
         shapes: &[BlockShape],
         half: &[HalfStep],
     ) -> Row {
-        match self.at.get(k).and_then(|&i| self.rows.get(i as usize)) {
-            Some((a, row)) if a.to_bits() == anchor.to_bits() => *row,
-            _ => shear_row(c, shapes, half, anchor),
-        }
+        self.kept(k, anchor)
+            .copied()
+            .unwrap_or_else(|| shear_row(c, shapes, half, anchor))
     }
 }
 
@@ -227,7 +232,6 @@ impl Simulation {
     pub(crate) fn collect_springs(&mut self) {
         self.scratch.springs.clear();
         self.scratch.forces.clear();
-
         let p = &self.model.params;
         let (pn, ps) = (p.normal_penalty, p.shear_penalty);
         for (pk, pc) in self.state.contacts.pairs.iter().enumerate() {

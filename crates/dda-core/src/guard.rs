@@ -10,10 +10,9 @@
 //!   [`ENERGY_TOLERANCE`] of a reference: the largest supply so far plus the energy
 //!   the model cannot resolve (every free block lowered by d_tol under gravity, and a
 //!   contact spring pressed by the overlap validation allows at the start, 1e-9 of the
-//!   block's size). Contact
-//!   and fixed-point springs store energy and friction dissipates it, so neither can
-//!   make the balance rise; only a numerical fault can (a lost contact releasing a
-//!   compressed spring, a step far beyond the motion's scale).
+//!   block's size). Contact and fixed-point springs store energy and friction
+//!   dissipates it, so neither can make the balance rise; only a numerical fault can (a
+//!   lost contact releasing a compressed spring, a step far beyond the motion's scale).
 //!
 //! What happens on a violation is the run's choice ([`crate::RunOptions`]): stop with
 //! the last good state, or record it and go on.

@@ -50,8 +50,8 @@ const SETTLE_MAX_STEPS: u32 = 2000;
 /// approach one another by a fraction of a percent a step), and started from a
 /// settling stopped at 1e-3, 1e-4 or 3e-5 the walls parted by 10% to 30% (the slide as
 /// one body is unstable there, docs/method.md section 13); from 1e-5 (400 to 500
-/// steps) they hold to 0.29% (`tests/physics/stacks.rs`). The toppling columns of `tests/physics/regions.rs` stood
-/// to 0.24 mm at 1e-3 already.
+/// steps) they hold to 0.29% (`tests/physics/stacks.rs`). The toppling columns of
+/// `tests/physics/regions.rs` stood to 0.24 mm at 1e-3 already.
 const SETTLE_TOLERANCE: f64 = 1e-5;
 
 /// Steps without progress after which the settling stops: the change of the motion has
