@@ -10,21 +10,31 @@
 //! static steps of a copy of the model under the scene's own joints: each is a step of
 //! the run from rest (static: the velocities reset, so nothing rings), of the run's own
 //! size dt, or longer where the inertia 2 m / dt^2 of the heaviest block would exceed
-//! the penalty ([`SETTLE_INERTIA`]). Stiff modes (the contact springs) converge in a
-//! few such steps, to the forces that balance the weight, the loads and the inertia of
-//! the motion the blocks start (d'Alembert): those of a joint that holds, and of one
-//! that slides (friction at its limit, the normal force of the accelerated blocks).
-//! The steps go on until every vertex moves in a step as it moved in the step before
-//! (settled, or sliding steadily) to [`SETTLE_TOLERANCE`] of the first step's motion,
-//! until that stops improving ([`SETTLE_STALL`]), or for [`SETTLE_MAX_STEPS`]. Blocks
-//! that rest on nothing (in flight) are held where they are; the ground is still; and
-//! nothing is excavated (the settling's steps take time of their own, before t = 0,
-//! and would pass the excavations of the run). The run then starts from
-//! the settled places, stresses and contacts (their springs loaded, shear springs
-//! anchored where they were, glued seams bonded) with the blocks' own velocities. The
-//! work gravity and the loads did while settling is added to the energy the physics
-//! guard counts as supplied. A block free to slide moves by its slide while settling, a
-//! dt^2 / 2 a step (a its acceleration).
+//! a hundredth of the penalty ([`SETTLE_INERTIA`]). Stiff modes (the contact springs)
+//! converge in a few such steps, to the forces that balance the weight, the loads and
+//! the inertia of the motion the blocks start (d'Alembert): those of a joint that
+//! holds, and of one that slides (friction at its limit, the normal force of the
+//! accelerated blocks). The steps go on until every vertex moves in a step as it moved
+//! in the step before (settled, or sliding steadily) to [`SETTLE_TOLERANCE`] of the
+//! first step's motion, until that stops improving ([`SETTLE_STALL`]), or for
+//! [`SETTLE_MAX_STEPS`] in all. Blocks that rest on nothing (in flight) are held where
+//! they are; the ground is still; and nothing is excavated (the settling's steps take
+//! time of their own, before t = 0, and would pass the excavations of the run).
+//!
+//! A block free to slide moves by its slide while settling, a dt^2 / 2 a step (a its
+//! acceleration): over a hundred steps of a wall, millimetres, a percent of what it
+//! slides in the run's first half second. A converged settling takes that back
+//! ([`Simulation::rewind`]): every block moves back along its steady motion, which
+//! changes no contact's load (a joint that holds moves with both its blocks, one that
+//! slides along its edge). Where the motion is steady only to the tolerance, going
+//! back by a hundred steps of it disturbs the loads a little, so the settling goes on
+//! after it, and takes that round's slide back in turn: [`SETTLE_ROUNDS`] rounds, the
+//! slide of the last kept (a few steps' for a stack).
+//!
+//! The run then starts from the settled places, stresses and contacts (their springs
+//! loaded, shear springs anchored where they were, glued seams bonded) with the blocks'
+//! own velocities. The work gravity and the loads did while settling, net of the way
+//! back, is added to the energy the physics guard counts as supplied.
 //!
 //! Holding every joint while settling (a static solution of glued blocks, our first
 //! design) is wrong where the scene's joints cannot hold: it loads them with shear they
@@ -37,7 +47,7 @@ use crate::model::supported_blocks;
 use crate::scene::{Integration, Mode};
 use crate::simulation::{RunOptions, Simulation};
 use dda_contact::BlockShape;
-use dda_geom::DVec2;
+use dda_geom::{DVec2, displace_point};
 
 /// Most static steps of the settling.
 const SETTLE_MAX_STEPS: u32 = 2000;
@@ -62,10 +72,37 @@ const SETTLE_TOLERANCE: f64 = 1e-5;
 const SETTLE_STALL: u32 = 200;
 
 /// The inertia of a settling step, 2 m / dt^2 for the heaviest block, is at most this
-/// share of the normal penalty: the step is the run's own, or longer where that would
-/// take many steps for the springs to carry their load (each step carries the
-/// imbalance down to inertia / (inertia + penalty) of what it was).
-const SETTLE_INERTIA: f64 = 1.0;
+/// share of the normal penalty: the step is the run's own, or longer. Each step carries
+/// a contact's imbalance down to inertia / (inertia + penalty) of what it was, and the
+/// blocks' own elastic modes (E = 1e9 Pa bricks are softer than a penalty of 1e10 N/m)
+/// likewise against their stiffness. Our choice, measured on masons' walls (courses of
+/// five 1 m bricks, E = 1e9 Pa, p = 1e10 N/m, dt 1 ms, 30/25, so that the run's step
+/// gives an inertia of a quarter of the penalty): at 1 (until 2026-11-25) the settling
+/// took 700 to 860 steps, often without converging, and 6 and 8 courses parted by 1.6%
+/// to 24% in the run; at 0.01, 120 to 370 steps, within 0.25% to 0.94%
+/// (docs/method.md section 13). Stiff walls and stacks settled with steps as long
+/// already.
+const SETTLE_INERTIA: f64 = 0.01;
+
+/// Rounds of settling, each after the first begun by taking back the slide of the one
+/// before ([`Simulation::rewind`]). Our choice: with two the softest wall above was
+/// 1.3% off after 0.5 s, with three 0.88%, with four 0.80%; a stack's rounds take two
+/// steps each.
+const SETTLE_ROUNDS: u32 = 3;
+
+/// What one round of settling did ([`Simulation::relax`]).
+struct Relaxed {
+    /// Static steps taken.
+    steps: u32,
+    /// Whether the motion converged.
+    converged: bool,
+    /// The largest motion of the settling's first step, over dt^2 / 2.
+    scale: f64,
+    /// Each block's rigid motion (translation, rotation) summed over the round's steps.
+    slide: Vec<[f64; 3]>,
+    /// Each block's rigid motion in the round's last step.
+    steady: Vec<[f64; 3]>,
+}
 
 /// What the settling did before t = 0 ([`Simulation::settling`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -73,8 +110,9 @@ pub struct Settling {
     /// Static steps taken.
     pub steps: u32,
     /// Whether the motion converged (every vertex moving as in the step before, to 1e-5
-    /// of the first step's motion); if not, the settling stopped after 200 steps
-    /// without progress, or at its most steps, 2,000 (docs/method.md section 13).
+    /// of the first step's motion) in the last round; if not, the settling stopped
+    /// after 200 steps without progress, or at its most steps, 2,000 in all
+    /// (docs/method.md section 13).
     pub converged: bool,
 }
 
@@ -154,54 +192,29 @@ impl Simulation {
         // stack (the layers above falling with it) and a tall stack runs out of them.
         settling.close_touching = true;
         let supplied = settling.state.energy.supplied;
-        // Each step's motion of every free vertex over dt^2 / 2 (its acceleration from
-        // rest, the same over steps of any size while a block slides steadily, so that
-        // steps cut and grown back compare); the first step's largest; the smallest
-        // change from step to step so far, and its step.
-        let mut last: Vec<DVec2> = Vec::new();
-        let mut first = None;
-        let (mut best, mut best_at) = (f64::INFINITY, 0);
+        let mut round = settling.relax(SETTLE_MAX_STEPS, None)?;
         let mut report = Settling {
-            steps: 0,
-            converged: false,
+            steps: round.steps,
+            converged: round.converged,
         };
-        for n in 1..=SETTLE_MAX_STEPS {
-            if settling.finished() {
+        for _ in 1..SETTLE_ROUNDS {
+            if !round.converged {
                 break;
             }
-            report.steps = n;
-            let before = settling.free_vertices();
-            let record = settling.step().map_err(|e| SimError::Settle {
-                reason: e.to_string(),
-            })?;
-            let per = 2.0 / (record.dt * record.dt);
-            let motion: Vec<DVec2> = settling
-                .free_vertices()
-                .iter()
-                .zip(&before)
-                .map(|(a, b)| (*a - *b) * per)
-                .collect();
-            let size = motion.iter().map(|m| m.length()).fold(0.0, f64::max);
-            let scale = *first.get_or_insert(size);
-            let change = if last.is_empty() {
-                f64::INFINITY
-            } else {
-                motion
-                    .iter()
-                    .zip(&last)
-                    .map(|(a, b)| (*a - *b).length())
-                    .fold(0.0, f64::max)
-            };
-            if change <= SETTLE_TOLERANCE * scale {
-                report.converged = true;
+            // A round after a rewind has as many steps as the first took; one that does
+            // not converge in them leaves the blocks where the round before settled them.
+            let settled = settling.state.clone();
+            if !settling.rewind(&round) {
                 break;
             }
-            if change <= 0.5 * best {
-                (best, best_at) = (change, n);
-            } else if n - best_at >= SETTLE_STALL {
+            let budget = report.steps.min(SETTLE_MAX_STEPS - report.steps);
+            let next = settling.relax(budget, Some(round.scale))?;
+            report.steps += next.steps;
+            if !next.converged {
+                settling.state = settled;
                 break;
             }
-            last = motion;
+            round = next;
         }
         // The settled places, stresses and contacts; the run's own velocities.
         for (i, (b, settled)) in self
@@ -242,6 +255,144 @@ impl Simulation {
             .supplied_max
             .max(self.state.energy.supplied);
         Ok(())
+    }
+
+    /// One round of settling: static steps until the motion converges (see the module
+    /// docs), for at most `budget` steps; `scale`, the largest motion of the settling's
+    /// first step (over dt^2 / 2), once known.
+    fn relax(&mut self, budget: u32, scale: Option<f64>) -> Result<Relaxed, SimError> {
+        // Each step's motion of every free vertex over dt^2 / 2 (its acceleration from
+        // rest, the same over steps of any size while a block slides steadily, so that
+        // steps cut and grown back compare); the first step's largest; the smallest
+        // change from step to step so far, and its step.
+        let mut last: Vec<DVec2> = Vec::new();
+        let mut first = scale;
+        let (mut best, mut best_at) = (f64::INFINITY, 0);
+        let mut report = Relaxed {
+            steps: 0,
+            converged: false,
+            scale: 0.0,
+            slide: vec![[0.0f64; 3]; self.state.blocks.len()],
+            steady: vec![[0.0f64; 3]; self.state.blocks.len()],
+        };
+        for n in 1..=budget {
+            if self.finished() {
+                break;
+            }
+            report.steps = n;
+            let before = self.free_vertices();
+            let record = self.step().map_err(|e| SimError::Settle {
+                reason: e.to_string(),
+            })?;
+            let per = 2.0 / (record.dt * record.dt);
+            let motion: Vec<DVec2> = self
+                .free_vertices()
+                .iter()
+                .zip(&before)
+                .map(|(a, b)| (*a - *b) * per)
+                .collect();
+            let size = motion.iter().map(|m| m.length()).fold(0.0, f64::max);
+            let scale = *first.get_or_insert(size);
+            report.scale = scale;
+            let change = if last.is_empty() {
+                f64::INFINITY
+            } else {
+                motion
+                    .iter()
+                    .zip(&last)
+                    .map(|(a, b)| (*a - *b).length())
+                    .fold(0.0, f64::max)
+            };
+            // The rigid motion of the step, block by block (see `rewind`).
+            for (i, slid) in report.slide.iter_mut().enumerate() {
+                if self.free[i].is_some() {
+                    let d = &self.scratch.d[i];
+                    report.steady[i] = [d[0], d[1], d[2]];
+                    for (a, b) in slid.iter_mut().zip(&report.steady[i]) {
+                        *a += b;
+                    }
+                }
+            }
+            if change <= SETTLE_TOLERANCE * scale {
+                report.converged = true;
+                break;
+            }
+            if change <= 0.5 * best {
+                (best, best_at) = (change, n);
+            } else if n - best_at >= SETTLE_STALL {
+                break;
+            }
+            last = motion;
+        }
+        Ok(report)
+    }
+
+    /// Takes back the slide of a converged round of settling (see the module docs): every free
+    /// block moves back along the rigid part of its steady motion, `steady` (the last
+    /// step's translation and rotation), by the one multiple of it that best undoes the
+    /// rigid motion the blocks made while settling, `slide` (least squares over the
+    /// blocks' translations, weighted by their masses). Motion that is steady changes no
+    /// contact: a contact that holds moves with both its blocks, one that slides along
+    /// its edge; so the contacts keep their loads, and the blocks return towards the
+    /// places the scene gave them. The work gravity and the loads do on the way back is
+    /// taken from the energy supplied. Returns whether it moved the blocks.
+    fn rewind(&mut self, round: &Relaxed) -> bool {
+        let (slide, steady) = (&round.slide, &round.steady);
+        let (mut along, mut norm) = (0.0, 0.0);
+        for &i in &self.free_blocks {
+            let i = i as usize;
+            let m = self.block_mass(i);
+            along += m * (slide[i][0] * steady[i][0] + slide[i][1] * steady[i][1]);
+            norm += m * (steady[i][0] * steady[i][0] + steady[i][1] * steady[i][1]);
+        }
+        // A block sliding steadily from the round's first step slides by its steps of
+        // its steady motion, and by the little it sinks into its springs. A slide of
+        // more than twice that is not that motion (blocks that moved while loading their
+        // contacts and came to rest, whose last motion is a creep of rounding: the
+        // examples' slopes and tunnel, 1e3 to 1e4 times their steps), and stays.
+        let back = along / norm;
+        if !(back > 0.0 && back <= 2.0 * f64::from(round.steps)) {
+            return false;
+        }
+        let gravity = match self.model.params.gravity {
+            Some(g) if self.effects.gravity => g,
+            _ => DVec2::ZERO,
+        };
+        let mut work = 0.0;
+        for i in 0..self.state.blocks.len() {
+            if self.free[i].is_none() {
+                continue;
+            }
+            let d = [
+                -back * steady[i][0],
+                -back * steady[i][1],
+                -back * steady[i][2],
+                0.0,
+                0.0,
+                0.0,
+            ];
+            let mass = self.block_mass(i);
+            let b = &mut self.state.blocks[i];
+            let c = b.polygon.centroid();
+            let mut moved = b.polygon.clone();
+            if moved.displace(c, &d).is_err() {
+                continue;
+            }
+            b.polygon = moved;
+            b.rotation += d[2];
+            self.scratch.shapes[i].set(&b.polygon);
+            work += mass * gravity.dot(DVec2::new(d[0], d[1]));
+            for (at, force) in b.loads.iter_mut() {
+                let to = displace_point(*at, c, &d);
+                work += force.dot(to - *at);
+                *at = to;
+            }
+            for (now, _) in b.fixed_points.iter_mut() {
+                *now = displace_point(*now, c, &d);
+            }
+        }
+        self.state.energy.supplied += work;
+        true
     }
 
     /// The vertices of every free block, block by block.
