@@ -29,7 +29,10 @@
 //! slides along its edge). Where the motion is steady only to the tolerance, going
 //! back by a hundred steps of it disturbs the loads a little, so the settling goes on
 //! after it, and takes that round's slide back in turn: [`SETTLE_ROUNDS`] rounds, the
-//! slide of the last kept (a few steps' for a stack).
+//! slide of the last kept (a few steps' for a stack). A round that does not converge
+//! within the steps the rounds before it took is undone; and blocks whose slide is not
+//! their steady motion (they came to rest after loading their contacts) are not taken
+//! back at all.
 //!
 //! The run then starts from the settled places, stresses and contacts (their springs
 //! loaded, shear springs anchored where they were, glued seams bonded) with the blocks'
@@ -201,8 +204,8 @@ impl Simulation {
             if !round.converged {
                 break;
             }
-            // A round after a rewind has as many steps as the first took; one that does
-            // not converge in them leaves the blocks where the round before settled them.
+            // A round after a rewind has at most the steps the rounds before it took; one
+            // that does not converge in them leaves the blocks where they had settled.
             let settled = settling.state.clone();
             if !settling.rewind(&round) {
                 break;
