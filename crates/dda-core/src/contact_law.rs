@@ -173,6 +173,30 @@ pub fn decide(
     n
 }
 
+/// The state of contact `c` decided as `n`, once it has changed state `flips` times in
+/// this attempt of a step: past [`CYCLE_LIMIT`] it cycles (see the module docs), and may
+/// close or begin to slide, but neither open nor lock again. Kept from opening, it is
+/// decided as closed with no normal force (`at_rest`, the decision at d = 0), so that it
+/// holds no shear beyond the band; and kept sliding, also where that decision would
+/// lock it (it reads the reversal of a contact that was about to open).
+pub fn end_cycle(c: &Contact, n: Contact, flips: u8, at_rest: impl FnOnce() -> Contact) -> Contact {
+    if n.state == c.state || flips < CYCLE_LIMIT {
+        return n;
+    }
+    let n = if c.state.is_closed() && !n.state.is_closed() {
+        at_rest()
+    } else {
+        n
+    };
+    if c.state == ContactState::Sliding && n.state == ContactState::Locked {
+        return Contact {
+            normal_force: n.normal_force,
+            ..*c
+        };
+    }
+    n
+}
+
 impl Simulation {
     /// Sets each block's force scale (see the module docs): the magnitude of the external
     /// force on a free block, its weight and its point loads; infinite for a fixed block.
@@ -247,22 +271,10 @@ impl Simulation {
                     || contact_length(&c, shapes),
                 )
             };
-            let mut n = decide_at(trial);
-            // A cycle (see the module docs): past the limit the contact may close or begin
-            // to slide, but neither open nor lock again in this attempt. Kept from
-            // opening, it is decided as closed with no normal force, so that it holds no
-            // shear beyond the band.
-            let cycling =
-                n.state != c.state && self.scratch.flips.get(k).is_some_and(|&f| f >= CYCLE_LIMIT);
-            if cycling && c.state.is_closed() && !n.state.is_closed() {
-                n = decide_at(Trial { d: 0.0, ..trial });
-            } else if cycling && c.state == ContactState::Sliding && n.state == ContactState::Locked
-            {
-                n = Contact {
-                    normal_force: n.normal_force,
-                    ..c
-                };
-            }
+            let flips = self.scratch.flips.get(k).copied().unwrap_or(0);
+            let n = end_cycle(&c, decide_at(trial), flips, || {
+                decide_at(Trial { d: 0.0, ..trial })
+            });
             if n.state != c.state
                 && let Some(f) = self.scratch.flips.get_mut(k)
             {
@@ -406,6 +418,43 @@ mod tests {
         assert_eq!(
             decided(&sliding, &j, -1e-6, 0.0, 1e-7).state,
             ContactState::Sliding
+        );
+    }
+
+    /// Past the cycle limit a contact may close or begin to slide but neither open nor
+    /// lock again: a sliding one that would open is decided at rest, and stays sliding
+    /// where that decision would lock it; below the limit every decision stands.
+    #[test]
+    fn cycles_end_closed_and_sliding() {
+        let sliding = Contact {
+            slide_dir: 1.0,
+            normal_force: 10.0,
+            ..contact(ContactState::Sliding)
+        };
+        let open = contact(ContactState::Open);
+        let locked = Contact {
+            normal_force: 0.0,
+            ..contact(ContactState::Locked)
+        };
+        let kept = end_cycle(&sliding, open, CYCLE_LIMIT, || locked);
+        assert_eq!((kept.state, kept.slide_dir), (ContactState::Sliding, 1.0));
+        assert_eq!(kept.normal_force, 0.0);
+        assert_eq!(
+            end_cycle(&sliding, locked, CYCLE_LIMIT, || open).state,
+            ContactState::Sliding
+        );
+        let at_rest = Contact {
+            normal_force: 0.0,
+            ..sliding
+        };
+        assert_eq!(end_cycle(&sliding, open, CYCLE_LIMIT, || at_rest), at_rest);
+        assert_eq!(end_cycle(&sliding, open, CYCLE_LIMIT - 1, || locked), open);
+        // Closing and beginning to slide stand past the limit.
+        assert_eq!(end_cycle(&open, locked, CYCLE_LIMIT, || open), locked);
+        let locked_loaded = contact(ContactState::Locked);
+        assert_eq!(
+            end_cycle(&locked_loaded, sliding, CYCLE_LIMIT, || open),
+            sliding
         );
     }
 
