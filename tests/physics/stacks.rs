@@ -216,8 +216,8 @@ fn stacks_and_walls_slide_as_one_body() {
 /// friction limit tips beyond h / w = 1 / (2 tan phi), 1.07 at 25 degrees), where the
 /// slide as one body is unstable: settled to 1e-3 of the first step's motion, with 20
 /// steps without progress (until 2026-11-24), the first four parted by 17% to 30%; the
-/// soft walls, settled in steps of the run's own size (until 2026-11-25), by 1.2% to
-/// 35% (docs/method.md, section 13).
+/// first three soft walls, settled in steps of the run's own size (until 2026-11-25), by
+/// 1.6% to 3.7%; the example held to 0.3% then (docs/method.md, section 13).
 #[test]
 fn masons_walls_slide_as_one_body_from_a_converged_settling() {
     let bricks = |h: f64, penalty: f64, young: f64| Bricks {
