@@ -30,8 +30,8 @@
 //! (the two covers of one corner sharing a load, a shear force hovering at the friction
 //! limit). From then on, for the rest of the attempt, it may close, or go from locked to
 //! sliding, but neither open nor lock again; kept from opening, it is decided as a
-//! closed contact carrying no normal force (so it slides if sheared beyond the band).
-//! Closed never lets blocks pass into each other, and sliding bounds its shear force by
+//! closed contact carrying no normal force (so it slides if sheared beyond the band, or
+//! locks if its motion reversed: [`end_cycle`]). Closed never lets blocks pass into each other, and sliding bounds its shear force by
 //! friction instead of holding a block that is still moving. The next step decides it
 //! afresh.
 
