@@ -31,9 +31,9 @@
 //! limit). From then on, for the rest of the attempt, it may close, or go from locked to
 //! sliding, but neither open nor lock again; kept from opening, it is decided as a
 //! closed contact carrying no normal force (so it slides if sheared beyond the band, or
-//! locks if its motion reversed: [`end_cycle`]). Closed never lets blocks pass into each other, and sliding bounds its shear force by
-//! friction instead of holding a block that is still moving. The next step decides it
-//! afresh.
+//! locks if its motion reversed: [`end_cycle`]). Closed never lets blocks pass into
+//! each other, and sliding bounds its shear force by friction instead of holding a
+//! block that is still moving. The next step decides it afresh.
 
 use crate::simulation::Simulation;
 
