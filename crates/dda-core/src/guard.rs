@@ -113,11 +113,7 @@ impl Simulation {
     ) -> Result<(), SimError> {
         let p = &self.model.params;
         let dynamic = p.mode == Mode::Dynamic;
-        let gravity = if self.effects.gravity {
-            p.gravity.unwrap_or(DVec2::ZERO)
-        } else {
-            DVec2::ZERO
-        };
+        let gravity = self.gravity();
         let (mut mechanical, mut work) = (0.0, 0.0);
         let mut gains = std::mem::take(&mut self.scratch.gains);
         gains.clear();

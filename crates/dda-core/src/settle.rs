@@ -361,10 +361,7 @@ impl Simulation {
         if !(back > 0.0 && back <= 2.0 * f64::from(round.steps)) {
             return false;
         }
-        let gravity = match self.model.params.gravity {
-            Some(g) if self.effects.gravity => g,
-            _ => DVec2::ZERO,
-        };
+        let gravity = self.gravity();
         let mut work = 0.0;
         for i in 0..self.state.blocks.len() {
             if self.free[i].is_none() {
@@ -381,11 +378,11 @@ impl Simulation {
             let mass = self.block_mass(i);
             let b = &mut self.state.blocks[i];
             let c = b.polygon.centroid();
-            let mut moved = b.polygon.clone();
-            if moved.displace(c, &d).is_err() {
+            // A rigid motion keeps the polygon's orientation: this cannot fail (and a
+            // failure would leave the block where it is).
+            if b.polygon.displace(c, &d).is_err() {
                 continue;
             }
-            b.polygon = moved;
             b.rotation += d[2];
             self.scratch.shapes[i].set(&b.polygon);
             work += mass * gravity.dot(DVec2::new(d[0], d[1]));

@@ -339,6 +339,15 @@ impl Simulation {
             .fold(self.model.params.duration, f64::min)
     }
 
+    /// The body acceleration in effect, m/s^2: the scene's gravity while the gravity
+    /// effect is on, else none.
+    pub(crate) fn gravity(&self) -> dda_geom::DVec2 {
+        match self.model.params.gravity {
+            Some(g) if self.effects.gravity => g,
+            _ => dda_geom::DVec2::ZERO,
+        }
+    }
+
     /// Block `i`'s mass per metre of thickness, kg/m.
     pub(crate) fn block_mass(&self, i: usize) -> f64 {
         let mat = self.model.materials[self.material[i] as usize];
