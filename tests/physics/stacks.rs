@@ -212,7 +212,8 @@ fn stacks_and_walls_slide_as_one_body() {
 /// (E = 1e9 Pa, p = 1e10 N/m): 6 courses, 8 courses of 1 m x 0.4 m bricks, 8 courses on
 /// 30/20, the example, 4 courses of 3 and of 10 on 40/30, and 6 courses on 40/30
 /// and 35/30; and 10 courses of three 2 m x 0.5 m bricks on 40/30 (E = 1e9 Pa). Every
-/// block within 1% of the closed form after 0.5 s (0.04% to 0.64% measured). Their half bricks stand near
+/// block within 1% of the closed form after 0.5 s (0.03% to 0.57% measured). Their
+/// half bricks stand near
 /// their toppling limit (a brick h high and w wide under a course sliding at its
 /// friction limit tips beyond h / w = 1 / (2 tan phi), 1.07 at 25 degrees), where the
 /// slide as one body is unstable: settled to 1e-3 of the first step's motion, with 20
@@ -260,15 +261,16 @@ fn masons_walls_slide_as_one_body_from_a_converged_settling() {
 }
 
 /// The settling takes its slide back: stacks of 1, 3 and 6 flat bricks on 40/30 and
-/// 35/20, 10 steps after t = 0, have slid by the closed form plus at most three steps'
-/// slide (3 dt^2 / t^2 of it): a stack slides steadily from the settling's first step
-/// (its springs stiff against its inertia), so the last round of the settling, whose
-/// slide is kept, converges in two steps of equal motion. Kept, the settling's slide
-/// was 7 or more steps' (7% of the closed form at 10 steps).
+/// 35/20, 10 steps after t = 0, have slid by the closed form plus at most one and a half
+/// steps' slide (1.5 dt^2 / t^2 of it): the slide of every round is taken back, the
+/// last one's too, and only the one step that checks the way back is kept (0.0084 to
+/// 0.0111 measured). With the last round's slide kept (until 2026-11-25) they were
+/// 0.018 to 0.021 off; with the whole settling's slide kept, 7 or more steps' (7% of
+/// the closed form at 10 steps).
 #[test]
 fn settled_stacks_start_where_the_scene_put_them() {
     let (dt, t) = (Bricks::FLAT.dt, 10.0 * Bricks::FLAT.dt);
-    let bound = 3.0 * dt * dt / (t * t);
+    let bound = 1.5 * dt * dt / (t * t);
     for (rows, slope, phi) in [(1, 40.0, 30.0), (3, 40.0, 30.0), (6, 35.0, 20.0)] {
         let (text, u) = stack(rows, 1, false, slope, phi, "");
         for (k, r) in slides_for(&text, u, slope, phi, Some(t)).iter().enumerate() {
