@@ -445,7 +445,7 @@ impl Simulation {
     /// a group: the mean translation, weighted by mass, of the blocks it is
     /// joined to through closed contacts between free blocks. Rewound by its blocks' own
     /// motions, a wall of soft bricks whose rows slid at rates equal only to the
-    /// settling's tolerance, or turned a little, was pressed into its joints by up to ten
+    /// settling's tolerance, or turned a little, was pressed into its joints by up to 14
     /// times a brick's weight, and took as many steps to settle again as it had taken
     /// first (docs/method.md section 13).
     fn group_translations(&self, steady: &[DVec2]) -> Vec<DVec2> {
