@@ -453,14 +453,17 @@ pub(crate) enum StepRule {
 
 impl Simulation {
     /// The rule of the next step: the average-acceleration rule when the scene asks for
-    /// it, the analysis is dynamic and the blocks' accelerations are known (from a step
+    /// it (throughout, or in the steps an impact holds down, as the step set out),
+    /// the analysis is dynamic and the blocks' accelerations are known (from a step
     /// taken); else the constant-acceleration rule.
     pub(crate) fn step_rule(&self) -> StepRule {
         let p = &self.model.params;
-        if p.integration == Integration::AverageAcceleration
-            && p.mode == Mode::Dynamic
-            && self.state.accelerations_known
-        {
+        let asked = match p.integration {
+            Integration::ConstantAcceleration => false,
+            Integration::AverageAcceleration => true,
+            Integration::AverageInImpacts => self.scratch.in_impact,
+        };
+        if asked && p.mode == Mode::Dynamic && self.state.accelerations_known {
             StepRule::Average
         } else {
             StepRule::Constant

@@ -270,6 +270,14 @@ impl Scene {
                  give impact_steps (10 is a good start)",
             ));
         }
+        if params.integration == Integration::AverageInImpacts && params.impact_steps.is_none() {
+            warnings.push(invalid(
+                "analysis.integration",
+                "average-in-impacts without impact_steps: no step is held down for an \
+                 impact, so every step is taken by the constant-acceleration rule; give \
+                 impact_steps (10 is a good start)",
+            ));
+        }
         if params.d_tol < 2.0 * params.d_max {
             warnings.push(invalid(
                 "analysis.contact_tolerance",
@@ -764,7 +772,7 @@ impl Analysis {
             ));
         }
         let integration = self.integration.unwrap_or(if self.impact_steps.is_some() {
-            Integration::AverageAcceleration
+            Integration::AverageInImpacts
         } else {
             Integration::ConstantAcceleration
         });

@@ -252,7 +252,7 @@ pub struct Analysis {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub impact_steps: Option<u32>,
     /// The time-integration rule; default `constant-acceleration` (Shi's), or
-    /// `average-acceleration` when `impact_steps` is given.
+    /// `average-in-impacts` when `impact_steps` is given.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub integration: Option<Integration>,
     /// Settle a dynamic analysis before it starts: the blocks resting on each other
@@ -275,6 +275,11 @@ pub enum Integration {
     /// Newmark's average acceleration (gamma = 1/2, beta = 1/4): D = V dt + (a + a')
     /// dt^2 / 4, V' = V + (a + a') dt / 2; conserves the energy of linear springs.
     AverageAcceleration,
+    /// The average-acceleration rule in the steps `impact_steps` holds down (an impact
+    /// under way), Shi's in the others: impacts keep their energy, and blocks resting
+    /// or sliding on each other keep the damping of Shi's rule (docs/method.md section
+    /// 12). The default with `impact_steps`.
+    AverageInImpacts,
 }
 
 fn default_max_rotation_deg() -> f64 {

@@ -85,6 +85,9 @@ pub(crate) struct Scratch {
     pub(crate) pair_entry: Vec<Option<Entry>>,
     /// Each block's half step, where the attempt's contact rows are linearised.
     pub(crate) half: Vec<HalfStep>,
+    /// Whether an impact holds the step down (`Simulation::impact_room`), set at the
+    /// step's start: the step's rule under `Integration::AverageInImpacts`.
+    pub(crate) in_impact: bool,
     /// Each active contact's normal row for the attempt (an inactive one's is a NaN
     /// placeholder until it becomes active: only active contacts' rows are read).
     pub(crate) rows: Vec<Row>,
@@ -271,6 +274,7 @@ impl Simulation {
                 block_pairs: Vec::new(),
                 pair_entry: Vec::new(),
                 half: Vec::with_capacity(n),
+                in_impact: false,
                 rows: Vec::new(),
                 springs: Vec::new(),
                 sheared: ShearRows::default(),
@@ -491,11 +495,9 @@ impl Simulation {
         let remaining = target - self.state.t;
         // The step respects the motion it starts with: no block's current velocity may
         // carry a vertex beyond d_max, or turn it beyond theta_max, within it.
-        let planned = self
-            .state
-            .dt
-            .min(self.velocity_room())
-            .min(self.impact_room());
+        let impact = self.impact_room();
+        self.scratch.in_impact = impact.is_finite();
+        let planned = self.state.dt.min(self.velocity_room()).min(impact);
         // Land on `duration`; a remainder within 1e-6 of a step is taken with it rather
         // than left as a sliver step.
         let landing = planned * (1.0 + 1e-6) >= remaining;

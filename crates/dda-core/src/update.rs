@@ -41,7 +41,7 @@ impl Simulation {
         let dynamic = model.params.mode == Mode::Dynamic;
         // The average-acceleration rule carries each block's acceleration: that of the
         // step just taken, by the rule it was taken by.
-        let carry = dynamic && model.params.integration == Integration::AverageAcceleration;
+        let carry = dynamic && model.params.integration != Integration::ConstantAcceleration;
         let average = self.step_rule() == StepRule::Average;
         let ground_velocity = self.model.ground.as_ref().map(|g| g.at(t + dt).1);
         for i in 0..self.state.blocks.len() {
