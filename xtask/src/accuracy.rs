@@ -208,7 +208,8 @@ fn impacts(doc: &mut String, pictures: &Path) -> Result<(), String> {
          collision: two 1 m squares meeting at 1 m/s, no gravity (dt0 = 5 ms, d_max = 5 mm,\n\
          p = 1e9 N/m). The drop: a 1 m square dropped 0.5 m onto a fixed base (dt0 = 1 ms,\n\
          d_max = 1 mm, p = 1e10 N/m). `impact_steps` varied with the rule it brings\n\
-         (average acceleration; `none`: the key absent, Shi's constant acceleration),\n\
+         (`average-in-impacts`: average acceleration in the steps an impact holds down;\n\
+         `none`: the key absent, Shi's constant acceleration),\n\
          with the constant-acceleration rule kept (to tell the time step from the rule),\n\
          and the penalty varied at `impact_steps = 10`. Error: |1 - restitution|.\n\n",
     );
