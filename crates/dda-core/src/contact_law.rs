@@ -177,9 +177,9 @@ pub fn decide(
 /// this attempt of a step: past [`CYCLE_LIMIT`] it cycles (see the module docs), and may
 /// close or begin to slide, but neither open nor lock again. Kept from opening, it is
 /// decided as closed with no normal force (`at_rest`, the decision at d = 0), so that it
-/// holds no shear beyond the band; that decision stands, a lock included (our choice:
-/// kept sliding there too, walls of 2 m x 0.5 m bricks on 45/40 parted by 23% to 43%
-/// where they held to 0.03%, docs/method.md section 6).
+/// holds no shear beyond the band; that decision stands, a lock included (our choice;
+/// kept sliding there instead, walls of 2 m x 0.5 m bricks on 45/40 parted by 23% to
+/// 43% where they held to 0.03%, docs/method.md section 6).
 pub fn end_cycle(c: &Contact, n: Contact, flips: u8, at_rest: impl FnOnce() -> Contact) -> Contact {
     if n.state == c.state || flips < CYCLE_LIMIT {
         return n;

@@ -53,7 +53,7 @@ use crate::model::supported_blocks;
 use crate::scene::{Integration, Mode};
 use crate::simulation::{RunOptions, Simulation};
 use dda_contact::BlockShape;
-use dda_geom::{DVec2, displace_point};
+use dda_geom::{DVec2, Groups, displace_point};
 
 /// Most static steps of the settling.
 const SETTLE_MAX_STEPS: u32 = 2000;
@@ -450,26 +450,17 @@ impl Simulation {
     /// first (docs/method.md section 13).
     fn group_translations(&self, steady: &[DVec2]) -> Vec<DVec2> {
         let n = self.state.blocks.len();
-        let mut group: Vec<usize> = (0..n).collect();
-        fn root(group: &mut [usize], mut i: usize) -> usize {
-            while group[i] != i {
-                group[i] = group[group[i]];
-                i = group[i];
-            }
-            i
-        }
+        let mut group = Groups::new(n);
         for c in &self.state.contacts.contacts {
             let (a, b) = (c.key.vertex_block as usize, c.key.edge_block as usize);
             if c.active && c.state.is_closed() && self.free[a].is_some() && self.free[b].is_some() {
-                let (ra, rb) = (root(&mut group, a), root(&mut group, b));
-                // The smaller index roots the group: the same groups in any order.
-                group[ra.max(rb)] = ra.min(rb);
+                group.join(a, b);
             }
         }
         let mut sum = vec![(DVec2::ZERO, 0.0); n];
         for &i in &self.free_blocks {
             let (i, m) = (i as usize, self.block_mass(i as usize));
-            let r = root(&mut group, i);
+            let r = group.of(i);
             sum[r].0 += m * steady[i];
             sum[r].1 += m;
         }
@@ -478,7 +469,7 @@ impl Simulation {
                 if self.free[i].is_none() {
                     return DVec2::ZERO;
                 }
-                let (t, m) = sum[root(&mut group, i)];
+                let (t, m) = sum[group.of(i)];
                 t / m
             })
             .collect()

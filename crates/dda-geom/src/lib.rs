@@ -12,6 +12,7 @@ mod aabb;
 mod cut;
 mod entrance;
 mod error;
+mod groups;
 mod mass;
 mod measures;
 mod polygon;
@@ -26,6 +27,7 @@ pub use self::entrance::{
     signed_distance,
 };
 pub use self::error::{JointSetError, PolygonError};
+pub use self::groups::Groups;
 pub use self::mass::{Joint, JointFamily, MassCutting, Outline, Piece, cut_mass};
 pub use self::measures::{
     ContactSubregion, VertexEdge, contact_region, entrance_filter, node_distances, normal_distance,

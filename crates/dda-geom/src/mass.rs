@@ -21,7 +21,7 @@
 use crate::cut::{Line, labelled_piece, split_ring};
 use crate::error::{JointSetError, PolygonError};
 use crate::polygon::{ConvexPolygon, DEFAULT_REL_TOL};
-use crate::{Aabb, JointSet};
+use crate::{Aabb, Groups, JointSet};
 use glam::DVec2;
 
 fn cross(a: DVec2, b: DVec2) -> f64 {
@@ -653,24 +653,14 @@ pub fn cut_mass(
         glue = glued_pairs(&cells, joints, eps);
     }
     // 5. Pieces: groups of glued parts, in the order of their first part.
-    let mut root: Vec<usize> = (0..cells.len()).collect();
-    fn find(root: &mut [usize], mut i: usize) -> usize {
-        while root[i] != i {
-            root[i] = root[root[i]];
-            i = root[i];
-        }
-        i
-    }
+    let mut root = Groups::new(cells.len());
     for &(a, b, _, _) in &glue {
-        let (ra, rb) = (find(&mut root, a), find(&mut root, b));
-        if ra != rb {
-            root[ra.max(rb)] = ra.min(rb);
-        }
+        root.join(a, b);
     }
     let mut groups: Vec<Vec<usize>> = Vec::new();
     let mut group_of = vec![usize::MAX; cells.len()];
     for k in 0..cells.len() {
-        let r = find(&mut root, k);
+        let r = root.of(k);
         if group_of[r] == usize::MAX {
             group_of[r] = groups.len();
             groups.push(Vec::new());
