@@ -31,6 +31,11 @@ fn scenes() -> Vec<Scene> {
     for name in ["paper-5.1a-column-20", "paper-4.1-sharp-corners"] {
         v.push(dda_bench::builtin(name).unwrap());
     }
+    // Solved iteratively: each attempt starts from the state alone.
+    let mut iterative = dda_bench::builtin("paper-5.1a-column-20").unwrap();
+    iterative.name = "column-20-iterative".into();
+    iterative.analysis.solver = Some(dda_core::scene::SolverChoice::Iterative);
+    v.push(iterative);
     v
 }
 

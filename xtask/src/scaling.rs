@@ -10,7 +10,8 @@
 //! large to run in one sitting can then be resumed (`dda resume`).
 
 use dda_bench::{PAPER_COLUMNS, column_scene};
-use dda_core::scene::Scene;
+use dda_core::iterative::solves_iteratively;
+use dda_core::scene::{Scene, SolverChoice};
 use dda_core::{RunOptions, Simulation};
 use dda_report::plot;
 use std::fmt::Write as _;
@@ -32,6 +33,19 @@ pub struct Options {
     /// Write the columns as scene files here instead of running them.
     #[arg(long)]
     write_scenes: Option<PathBuf>,
+    /// How the columns' systems are solved: auto (by size), direct or iterative.
+    #[arg(long, default_value = "auto", value_parser = solver_choice)]
+    solver: SolverChoice,
+}
+
+/// A solver choice by its name in the scene format.
+fn solver_choice(s: &str) -> Result<SolverChoice, String> {
+    match s {
+        "auto" => Ok(SolverChoice::Auto),
+        "direct" => Ok(SolverChoice::Direct),
+        "iterative" => Ok(SolverChoice::Iterative),
+        _ => Err(format!("`{s}`: expected auto, direct or iterative")),
+    }
 }
 
 impl Options {
@@ -49,6 +63,7 @@ impl Options {
 /// One run of the study.
 struct Row {
     blocks: usize,
+    solver: &'static str,
     unknowns: usize,
     build_s: f64,
     steps: u64,
@@ -60,14 +75,16 @@ struct Row {
     error: Option<String>,
 }
 
-/// The generated column of about `n` blocks, `duration` simulated seconds, no frames.
-fn scaled_column(n: usize, duration: f64) -> (usize, Scene) {
+/// The generated column of about `n` blocks, `duration` simulated seconds, no frames,
+/// solved as `solver` says.
+fn scaled_column(n: usize, duration: f64, solver: SolverChoice) -> (usize, Scene) {
     let column = PAPER_COLUMNS[3];
     let scale = (n as f64 / column.blocks as f64).sqrt();
     let blocks = column.scaled_blocks(scale);
     let mut analysis = column.analysis();
     analysis.duration = duration;
     analysis.frames = 0;
+    analysis.solver = (solver != SolverChoice::Auto).then_some(solver);
     let name = format!("column-{}", blocks.len());
     (blocks.len(), column_scene(&name, &blocks, analysis))
 }
@@ -76,7 +93,7 @@ fn scaled_column(n: usize, duration: f64) -> (usize, Scene) {
 fn write_scenes(o: &Options, dir: &Path) -> Result<(), String> {
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     for &n in &o.blocks {
-        let (count, scene) = scaled_column(n, o.duration);
+        let (count, scene) = scaled_column(n, o.duration, o.solver);
         let path = dir.join(format!("column-{count}.json"));
         let text = serde_json::to_string(&scene).map_err(|e| format!("{count} blocks: {e}"))?;
         std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -94,7 +111,7 @@ pub fn run(o: &Options) -> Result<(), String> {
     let mut rows = Vec::new();
     for &n in &o.blocks {
         let t0 = Instant::now();
-        let (count, scene) = scaled_column(n, o.duration);
+        let (count, scene) = scaled_column(n, o.duration, o.solver);
         let model = scene
             .validate()
             .map_err(|e| format!("{count} blocks: {}: {}", e.key, e.message))?;
@@ -119,6 +136,11 @@ pub fn run(o: &Options) -> Result<(), String> {
         let t = sim.totals();
         rows.push(Row {
             blocks: count,
+            solver: if solves_iteratively(o.solver, count) {
+                "iterative"
+            } else {
+                "direct"
+            },
             unknowns: sim.unknowns(),
             build_s,
             steps: t.steps,
@@ -133,27 +155,33 @@ pub fn run(o: &Options) -> Result<(), String> {
 
     let mut doc = format!(
         "# Time per step against the number of blocks\n\n\
-         Made by `cargo xtask scaling --blocks {} --duration {}` on this machine (2 cores).\n\
+         Made by `cargo xtask scaling --blocks {} --duration {}{}` on this machine (2 cores).\n\
          Columns cut by paper 5.2b's joint layout (two sets, 60 and 15 deg) over a region\n\
          s times as wide and as tall as 10 m x 20 m, so the blocks keep their sizes and\n\
          their number grows as s^2; Table 3's 5.2b parameters; cover detector, r_tol 1;\n\
          {} s simulated from rest. Build: cutting, validation and set-up.\n\n\
-         | blocks | unknowns | build s | steps | OCI | wall s | ms per step | detection | assembly | solve | per step per 1k blocks (ms) |\n\
-         | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+         | blocks | solver | unknowns | build s | steps | OCI | wall s | ms per step | detection | assembly | solve | per step per 1k blocks (ms) |\n\
+         | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
         o.blocks
             .iter()
             .map(|b| b.to_string())
             .collect::<Vec<_>>()
             .join(","),
         o.duration,
+        match o.solver {
+            SolverChoice::Auto => "",
+            SolverChoice::Direct => " --solver direct",
+            SolverChoice::Iterative => " --solver iterative",
+        },
         o.duration
     );
     for r in &rows {
         let per = |s: f64| 1e3 * s / r.steps.max(1) as f64;
         let _ = writeln!(
             doc,
-            "| {} | {} | {:.1} | {} | {} | {:.2} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} |{}",
+            "| {} | {} | {} | {:.1} | {} | {} | {:.2} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} |{}",
             r.blocks,
+            r.solver,
             r.unknowns,
             r.build_s,
             r.steps,
@@ -218,7 +246,7 @@ fn hand_written(doc: &str) -> &str {
 #[cfg(test)]
 mod tests {
     use super::{Options, hand_written, scaled_column, write_scenes};
-    use dda_core::scene::Scene;
+    use dda_core::scene::{Scene, SolverChoice};
     use std::path::PathBuf;
 
     /// A column written with `--write-scenes` loads back as the same scene, under the
@@ -231,9 +259,10 @@ mod tests {
             duration: 0.05,
             out: Some(PathBuf::from("unused")),
             write_scenes: Some(dir.clone()),
+            solver: SolverChoice::Auto,
         };
         write_scenes(&o, &dir).expect("written");
-        let (count, scene) = scaled_column(826, 0.05);
+        let (count, scene) = scaled_column(826, 0.05, SolverChoice::Auto);
         let (loaded, model) =
             Scene::load(&dir.join(format!("column-{count}.json"))).expect("loads");
         std::fs::remove_dir_all(&dir).ok();

@@ -41,6 +41,7 @@ pub fn analytic_analysis(
         impact_steps: None,
         integration: None,
         settle: Some(false),
+        solver: None,
     }
 }
 

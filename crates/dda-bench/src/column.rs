@@ -120,6 +120,7 @@ pub fn paper_analysis(
         impact_steps: None,
         integration: None,
         settle: Some(false),
+        solver: None,
     }
 }
 

@@ -158,6 +158,7 @@ impl Masonry {
                 impact_steps: None,
                 integration: None,
                 settle: Some(false),
+                solver: None,
             },
             materials: rock(2600.0, 1e9, 0.25),
             joints: BTreeMap::from([(

@@ -143,6 +143,8 @@ impl Simulation {
     /// block in free-block order. With `parallel` they are computed on the thread pool:
     /// each block's terms depend on that block alone, so the result is the same.
     pub(crate) fn base_terms(&mut self, dt: f64) {
+        self.scratch.attempt_dt = dt;
+        self.scratch.iteration_ready = false;
         self.block_base_terms(dt);
         self.bolt_terms();
     }
@@ -322,7 +324,12 @@ impl Simulation {
     }
 
     /// Assembles K (base terms and springs) and F, and factorises and solves.
-    pub(crate) fn assemble_and_factorise(&mut self, rec: &mut StepRecord) -> Result<(), SimError> {
+    /// Returns false when the system is solved iteratively and the solve did not meet
+    /// its bound (`crate::iterative`).
+    pub(crate) fn assemble_and_factorise(
+        &mut self,
+        rec: &mut StepRecord,
+    ) -> Result<bool, SimError> {
         let mut watch = Stopwatch::start();
         self.scratch.system.clear();
         for (f, k) in self.scratch.base_k.iter().enumerate() {
@@ -341,6 +348,12 @@ impl Simulation {
         self.bolt_couplings();
         self.assemble_rhs();
         watch.lap(rec, Phase::Assembly);
+        if self.scratch.system.is_iterative() {
+            let solved = self.solve_iteratively();
+            watch.lap(rec, Phase::Solve);
+            self.scratch.factor_current = true;
+            return Ok(solved.converged);
+        }
         self.scratch
             .system
             .solve()
@@ -356,7 +369,7 @@ impl Simulation {
             .factored_forces
             .clone_from(&self.scratch.forces);
         self.scratch.factor_current = true;
-        Ok(())
+        Ok(true)
     }
 }
 

@@ -26,7 +26,8 @@ pub const CHECKPOINT_MAGIC: [u8; 8] = *b"DDA-CKPT";
 /// contacts' pairs carry the cover detector's deep flag. Version 3: the physics guard's
 /// energy balance and recorded violations; the engine's state as one record and the
 /// running program's record apart from it. Version 4: what has come of each bolt.
-pub const CHECKPOINT_VERSION: u32 = 5;
+/// Version 6: the iterative solver's counters.
+pub const CHECKPOINT_VERSION: u32 = 6;
 
 /// Length of the header before the payload.
 const HEADER_LEN: usize = 24;

@@ -17,6 +17,7 @@ mod detection;
 pub mod diagnosis;
 pub mod effects;
 pub mod guard;
+pub mod iterative;
 pub mod kinematics;
 pub mod limits;
 mod locate;

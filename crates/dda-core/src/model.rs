@@ -4,7 +4,8 @@
 
 use crate::limits::{self, Range};
 use crate::scene::{
-    Analysis, BlockSpec, Integration, Invalid, Joint, Material, Mode, Plane, Scene, invalid,
+    Analysis, BlockSpec, Integration, Invalid, Joint, Material, Mode, Plane, Scene, SolverChoice,
+    invalid,
 };
 use crate::seismic::{GroundMotion, check_samples};
 use dda_geom::{ConvexPolygon, DVec2, PolygonError, PolygonOptions, separation};
@@ -701,6 +702,8 @@ pub struct Params {
     pub integration: Integration,
     /// Whether a dynamic analysis settles before it starts (`analysis.settle`).
     pub settle: bool,
+    /// How the global system is solved (`analysis.solver`).
+    pub solver: SolverChoice,
 }
 
 impl Analysis {
@@ -795,6 +798,7 @@ impl Analysis {
             impact_steps: self.impact_steps,
             integration,
             settle: self.mode == Mode::Dynamic && self.settle.unwrap_or(true),
+            solver: self.solver.unwrap_or_default(),
         })
     }
 }

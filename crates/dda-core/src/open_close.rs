@@ -36,9 +36,12 @@ impl Simulation {
     /// of one solve, they no longer cost a factorisation in the OCI, which still decides
     /// every state and convergence with exact solves. Skipped when the pattern changed.
     /// (Our choice: the paper starts the OCI from the previous step's states.)
-    pub(crate) fn predict_states(&mut self, rec: &mut StepRecord) {
+    pub(crate) fn predict_states(&mut self, rec: &mut StepRecord) -> Result<(), SimError> {
+        if self.scratch.system.is_iterative() {
+            return self.predict_states_iteratively(rec);
+        }
         if !self.scratch.system.is_factored() {
-            return;
+            return Ok(());
         }
         let mut watch = Stopwatch::start();
         // The prediction is no iteration of the attempt: its changes are not counted.
@@ -54,6 +57,22 @@ impl Simulation {
             self.update_states();
             watch.lap(rec, Phase::Assembly);
         }
+        Ok(())
+    }
+
+    /// The state predictor of a system solved iteratively: the step's own matrix and
+    /// right-hand side with the inherited states, solved iteratively (there is no earlier
+    /// factor), and every active contact re-checked against that motion.
+    fn predict_states_iteratively(&mut self, rec: &mut StepRecord) -> Result<(), SimError> {
+        self.scratch.flips.clear();
+        self.collect_springs();
+        if self.assemble_and_factorise(rec)? {
+            let mut watch = Stopwatch::start();
+            self.gather_solution();
+            self.update_states();
+            watch.lap(rec, Phase::Assembly);
+        }
+        Ok(())
     }
 
     /// Open-close iteration at step size `dt` (base terms already built). Returns whether
@@ -67,7 +86,9 @@ impl Simulation {
         self.scratch.flips.clear();
         self.scratch.flips.resize(self.state.contacts.len(), 0);
         for it in 1..=max_oci {
-            self.solve_states(rec)?;
+            if !self.solve_states(rec)? {
+                return Ok((false, it));
+            }
             let mut watch = Stopwatch::start();
             self.gather_solution();
             if let Some(i) = (0..self.scratch.d.len())
@@ -99,8 +120,9 @@ impl Simulation {
     }
 
     /// Solves for the current contact states: through the factor already computed when
-    /// few springs changed since, otherwise by assembling and factorising anew.
-    pub(crate) fn solve_states(&mut self, rec: &mut StepRecord) -> Result<(), SimError> {
+    /// few springs changed since, otherwise by assembling and factorising anew (or
+    /// solving iteratively). False when an iterative solve did not meet its bound.
+    pub(crate) fn solve_states(&mut self, rec: &mut StepRecord) -> Result<bool, SimError> {
         let mut watch = Stopwatch::start();
         self.collect_springs();
         let shear = self.scratch.springs.iter().filter(|s| s.shear).count() as u64;
@@ -119,7 +141,7 @@ impl Simulation {
                 .solve_low_rank(&self.scratch.changes, &self.scratch.rhs_changes);
             watch.lap(rec, Phase::Solve);
             if solved {
-                return Ok(());
+                return Ok(true);
             }
         } else {
             watch.lap(rec, Phase::Assembly);

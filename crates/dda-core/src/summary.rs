@@ -77,6 +77,12 @@ pub struct Summary {
     pub numeric_factorisations: u64,
     /// OCI solves done through a low-rank update of the last factor instead.
     pub low_rank_solves: u64,
+    /// Iterative solves (`analysis.solver`; absent when there were none).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub iterative_solves: u64,
+    /// Their conjugate-gradient iterations (absent when there were none).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub cg_iterations: u64,
     /// Wall-clock seconds.
     pub seconds: Seconds,
     /// Largest penetration after any step, m.
@@ -166,6 +172,8 @@ impl Summary {
             symbolic_factorisations: counters.symbolic,
             numeric_factorisations: counters.numeric,
             low_rank_solves: counters.low_rank,
+            iterative_solves: counters.iterative,
+            cg_iterations: counters.cg_iterations,
             seconds: Seconds {
                 total: t.total_s,
                 contact_detection: t.detection_s,
@@ -228,4 +236,9 @@ impl Summary {
             ..self.clone()
         }
     }
+}
+
+/// Whether a counter is zero (left out of the summary).
+fn is_zero(n: &u64) -> bool {
+    *n == 0
 }

@@ -30,6 +30,7 @@ fn analysis(duration: f64, dt: f64, d_max: f64, penalty: f64) -> Analysis {
         impact_steps: None,
         integration: None,
         settle: Some(false),
+        solver: None,
     }
 }
 

@@ -320,13 +320,20 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
         ("OCI iterations", s.oci_iterations.to_string()),
         ("time-step cuts", s.time_step_cuts.to_string()),
         ("unknowns", s.unknowns.to_string()),
-        (
-            "factorisations (symbolic / numeric / low-rank solves)",
-            format!(
-                "{} / {} / {}",
-                s.symbolic_factorisations, s.numeric_factorisations, s.low_rank_solves
-            ),
-        ),
+        if s.iterative_solves > 0 {
+            (
+                "iterative solves (conjugate-gradient iterations)",
+                format!("{} ({})", s.iterative_solves, s.cg_iterations),
+            )
+        } else {
+            (
+                "factorisations (symbolic / numeric / low-rank solves)",
+                format!(
+                    "{} / {} / {}",
+                    s.symbolic_factorisations, s.numeric_factorisations, s.low_rank_solves
+                ),
+            )
+        },
         (
             "wall seconds (total / detection / assembly / solve)",
             format!(

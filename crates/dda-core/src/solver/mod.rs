@@ -13,6 +13,8 @@
 //! goes); `factor` the numeric factorisation and its solves; `low_rank` the Woodbury
 //! solves of an iteration that changed few springs; `sweeps` the triangular sweeps.
 
+pub use self::iterative::Iterated;
+pub(crate) use self::iterative::chol;
 pub use self::low_rank::RankOne;
 use self::sweeps::{Factor, Scratch, Tree};
 use crate::kinematics::{Mat6, Vec6};
@@ -27,6 +29,7 @@ use faer::sparse::{SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::{Par, Side};
 
 mod factor;
+mod iterative;
 mod low_rank;
 mod sweeps;
 
@@ -88,6 +91,10 @@ pub struct SolverCounters {
     pub numeric: u64,
     /// Solves through a low-rank update of the factor.
     pub low_rank: u64,
+    /// Iterative solves (conjugate gradients, no factor).
+    pub iterative: u64,
+    /// Their conjugate-gradient iterations.
+    pub cg_iterations: u64,
 }
 
 /// Where the block pair (i, j) lives in the storage: an index into the block entries.
@@ -157,6 +164,21 @@ pub struct BlockSystem {
     /// Most bytes the factor and its workspace may take (None: no bound but the
     /// allocator's).
     pub memory_limit: Option<u64>,
+    /// Whether the system is solved iteratively ([`BlockSystem::solve_iterative`]):
+    /// then it keeps no factor, and its blocks stay in their own order.
+    iterative: bool,
+    /// Whether a pattern is set.
+    has_pattern: bool,
+    /// Whether the iterative solve's products run on two threads (the same result
+    /// either way).
+    pub threads: bool,
+    /// The iterative solve's start, then its solution (block order of the pattern).
+    pub(super) x: Vec<f64>,
+    /// The iterative solve's inverses of the diagonal blocks (its preconditioner) and of
+    /// the inertia terms (its bound), and its work vectors.
+    pub(super) diag_inverse: Vec<Mat6>,
+    pub(super) metric: Vec<Mat6>,
+    pub(super) work: Vec<f64>,
 }
 
 impl std::fmt::Debug for BlockSystem {
@@ -203,6 +225,13 @@ impl Default for BlockSystem {
             cap_rhs: Vec::new(),
             counters: SolverCounters::default(),
             memory_limit: None,
+            iterative: false,
+            has_pattern: false,
+            threads: false,
+            x: Vec::new(),
+            diag_inverse: Vec::new(),
+            metric: Vec::new(),
+            work: Vec::new(),
         }
     }
 }
@@ -211,6 +240,20 @@ impl BlockSystem {
     /// An empty system.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// A system solved iteratively ([`BlockSystem::solve_iterative`]): no ordering, no
+    /// symbolic analysis, no factor.
+    pub fn iterative() -> Self {
+        BlockSystem {
+            iterative: true,
+            ..Self::default()
+        }
+    }
+
+    /// Whether the system is solved iteratively.
+    pub fn is_iterative(&self) -> bool {
+        self.iterative
     }
 
     /// Unknowns per block.
@@ -226,9 +269,10 @@ impl BlockSystem {
         nd: usize,
         pairs: &[(u32, u32)],
     ) -> Result<bool, SolveError> {
-        if self.symbolic.is_some() && self.nb == nb && self.nd == nd && self.pairs == pairs {
+        if self.has_pattern && self.nb == nb && self.nd == nd && self.pairs == pairs {
             return Ok(false);
         }
+        self.has_pattern = false;
         self.factored = false;
         self.nb = nb;
         self.nd = nd;
@@ -290,6 +334,13 @@ impl BlockSystem {
         self.values.resize(row_idx.len(), 0.0);
         self.rhs.clear();
         self.rhs.resize(n, 0.0);
+        self.x.clear();
+        self.x.resize(n, 0.0);
+        if self.iterative {
+            self.pattern = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+            self.has_pattern = true;
+            return Ok(true);
+        }
 
         // With the identity ordering faer's symbolic analysis reads the upper triangle,
         // so it gets the transpose of our lower pattern.
@@ -337,6 +388,7 @@ impl BlockSystem {
         self.mem = MemBuffer::try_new(req).map_err(|_| fail())?;
         self.symbolic = Some(symbolic);
         self.counters.symbolic += 1;
+        self.has_pattern = true;
         Ok(true)
     }
 
@@ -348,6 +400,11 @@ impl BlockSystem {
     /// corner contacts and the pattern margin the level sets are thick separators.
     fn order_blocks(&mut self) -> Result<(), SolveError> {
         let nb = self.nb;
+        if self.iterative {
+            self.pos.clear();
+            self.pos.extend(0..nb as u32);
+            return Ok(());
+        }
         // Upper pattern of the block graph, column by column (faer reads A + A^T).
         let mut count = vec![0usize; nb];
         for &(_, j) in &self.pairs {

@@ -1,0 +1,101 @@
+//! The engine's side of the iterative solve (`analysis.solver`, docs/method.md section
+//! 14): which scenes take it, where each attempt starts, and the data of its stop.
+//!
+//! A system solved iteratively has no factor, so the state predictor and the low-rank
+//! solves of the direct path are skipped: every open-close iteration assembles the whole
+//! matrix and solves it by conjugate gradients, started from the last iteration's motion
+//! (the first iteration of an attempt from the blocks' velocities times dt).
+
+use crate::assembly::StepRule;
+use crate::kinematics::{Mat6, t_rows};
+use crate::scene::SolverChoice;
+use crate::simulation::Simulation;
+use crate::solver::{Iterated, chol};
+
+/// Free blocks from which `solver = "auto"` solves iteratively. Measured on the paper's
+/// two-set column scaled up (docs/scaling.md, 0.1 s each, whole runs): iterative over
+/// direct 9.3 s against 7.6 s at 3,472 blocks, 31.5 against 39.9 s at 10,131, 45.3
+/// against 63.2 s at 13,889 and 113 against 208 s at 28,325 (and 18.8 against 5.0 s at
+/// 826 blocks, 1 s); the ratio crosses 1 near 5,600 blocks.
+pub const ITERATIVE_FROM_BLOCKS: usize = 6_000;
+
+/// The largest error of a vertex's motion an iterative solve leaves, as a fraction of
+/// d_tol. Our choice: a gap error of 1e-8 d_tol, times a normal penalty, is a force some
+/// ten thousand times under a block's weight in the paper's columns, under the band
+/// within which the open-close iteration keeps a contact's state (docs/method.md
+/// section 6).
+pub const ITERATIVE_TOLERANCE: f64 = 1e-8;
+
+/// Most conjugate-gradient iterations of one solve; past them the attempt is treated as
+/// an open-close iteration that did not converge (dt is cut, which also conditions the
+/// system better).
+pub const MAX_CG_ITERATIONS: u32 = 2000;
+
+/// Whether a scene of `n_free` free blocks is solved iteratively under `choice`.
+pub fn solves_iteratively(choice: SolverChoice, n_free: usize) -> bool {
+    match choice {
+        SolverChoice::Direct => false,
+        SolverChoice::Iterative => true,
+        SolverChoice::Auto => n_free >= ITERATIVE_FROM_BLOCKS,
+    }
+}
+
+impl Simulation {
+    /// Solves the assembled system iteratively. At the attempt's first solve the start
+    /// is each block's velocity times dt and the stop's data are made: each block's
+    /// inertia term (c / dt^2 M, with c = 2 under Shi's rule and 4 under the average
+    /// acceleration) and the largest reach of a vertex (see `solver::iterative`). Later
+    /// solves of the attempt start from the last solution.
+    pub(crate) fn solve_iteratively(&mut self) -> Iterated {
+        let nd = self.nd;
+        if !self.scratch.iteration_ready {
+            self.scratch.iteration_ready = true;
+            let dt = self.scratch.attempt_dt;
+            let c = match self.step_rule() {
+                StepRule::Constant => 2.0,
+                StepRule::Average => 4.0,
+            } / (dt * dt);
+            let mut inertia = Vec::with_capacity(self.free_blocks.len());
+            let mut reach = 0.0f64;
+            for (f, &i) in self.free_blocks.iter().enumerate() {
+                let m: Mat6 = std::array::from_fn(|a| {
+                    std::array::from_fn(|b| c * self.scratch.mass[f][a][b])
+                });
+                let shape = &self.scratch.shapes[i as usize];
+                if let Some(l) = chol(&m, nd) {
+                    for &v in &shape.vertices {
+                        reach = reach.max(vertex_reach(&l, nd, &t_rows(v, shape.centroid)));
+                    }
+                }
+                inertia.push(m);
+                let v = self.state.blocks[i as usize].velocity;
+                let start: [f64; 6] = std::array::from_fn(|k| v[k] * dt);
+                self.scratch.system.set_start(f as u32, &start);
+            }
+            self.scratch.reach = reach;
+            self.scratch.system.set_inertia(&inertia);
+        }
+        let tol = ITERATIVE_TOLERANCE * self.model.params.d_tol;
+        self.scratch
+            .system
+            .solve_iterative(self.scratch.reach, tol, MAX_CG_ITERATIONS)
+    }
+}
+
+/// The largest eigenvalue of T I^-1 T^T for a vertex's two rows T and the Cholesky
+/// factor `l` of a block's inertia term I: how far the vertex can move per unit of the
+/// block's inertia-weighted error.
+fn vertex_reach(l: &Mat6, nd: usize, rows: &[[f64; 6]; 2]) -> f64 {
+    // y_k = L^-1 t_k; then the 2 x 2 Gram matrix of y_0 and y_1.
+    let forward = |t: &[f64; 6]| {
+        let mut y = [0.0f64; 6];
+        for i in 0..nd {
+            y[i] = (t[i] - (0..i).map(|k| l[i][k] * y[k]).sum::<f64>()) / l[i][i];
+        }
+        y
+    };
+    let (y0, y1) = (forward(&rows[0]), forward(&rows[1]));
+    let d = |a: &[f64; 6], b: &[f64; 6]| (0..nd).map(|k| a[k] * b[k]).sum::<f64>();
+    let (a, b, c) = (d(&y0, &y0), d(&y0, &y1), d(&y1, &y1));
+    0.5 * (a + c) + (0.25 * (a - c) * (a - c) + b * b).sqrt()
+}
