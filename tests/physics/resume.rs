@@ -211,3 +211,31 @@ fn threads_give_the_same_steps_bit_for_bit() {
     };
     assert_eq!(untimed_state(&with), untimed_state(&without));
 }
+
+/// The 826-block column solved iteratively (its products taken in two halves, on two
+/// threads, `solver::iterative`) takes the same steps and ends in the same state, bit
+/// for bit, in thread pools of 1, 2 and 4 threads.
+#[test]
+fn the_iterative_solve_gives_the_same_steps_in_any_pool() {
+    let mut scene = dda_bench::builtin("paper-5.2b-column-826").unwrap();
+    scene.analysis.solver = Some(dda_core::scene::SolverChoice::Iterative);
+    let model = scene.validate().unwrap();
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut sim = Simulation::new(model.clone(), RunOptions::default());
+            let recs: Vec<StepRecord> = (0..15).map(|_| untimed(&sim.step().unwrap())).collect();
+            let mut snap = sim.snapshot();
+            let t = &mut snap.state.totals;
+            (t.total_s, t.detection_s, t.assembly_s, t.solve_s) = (0.0, 0.0, 0.0, 0.0);
+            assert!(snap.counters.iterative > 0, "solved iteratively");
+            (recs, snap)
+        })
+    };
+    let one = run(1);
+    assert_eq!(run(2), one, "two threads");
+    assert_eq!(run(4), one, "four threads");
+}

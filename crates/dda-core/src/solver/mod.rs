@@ -309,17 +309,40 @@ impl BlockSystem {
             self.col_rows[self.col_start[j] + 1..self.col_start[j + 1]].sort_unstable();
         }
 
-        // Scalar lower-triangle CSC.
         let n = nb * nd;
-        let mut col_ptr = Vec::with_capacity(n + 1);
-        let mut row_idx = Vec::new();
-        self.entry_col.clear();
-        self.entry_col.resize(self.col_rows.len() * nd, 0);
+        self.rhs.clear();
+        self.rhs.resize(n, 0.0);
+        self.x.clear();
+        self.x.resize(n, 0.0);
         self.entry_diag.clear();
         self.entry_diag.resize(self.col_rows.len(), false);
-        col_ptr.push(0);
         for jb in 0..nb {
             self.entry_diag[self.col_start[jb]] = true;
+        }
+        self.entry_col.clear();
+        self.entry_col.resize(self.col_rows.len() * nd, 0);
+        if self.iterative {
+            // No factorisation reads the values: each block entry's columns lie together
+            // (the diagonal's lower triangle, an off-diagonal's nd x nd), in the order of
+            // the products with K, so that they stream from memory in one pass.
+            let mut off = 0;
+            for e in 0..self.col_rows.len() {
+                for q in 0..nd {
+                    self.entry_col[e * nd + q] = off;
+                    off += if self.entry_diag[e] { nd - q } else { nd };
+                }
+            }
+            self.values.clear();
+            self.values.resize(off, 0.0);
+            self.has_pattern = true;
+            return Ok(true);
+        }
+
+        // Scalar lower-triangle CSC.
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        let mut row_idx = Vec::new();
+        col_ptr.push(0);
+        for jb in 0..nb {
             for q in 0..nd {
                 for e in self.col_start[jb]..self.col_start[jb + 1] {
                     let ib = self.col_rows[e] as usize;
@@ -332,15 +355,6 @@ impl BlockSystem {
         }
         self.values.clear();
         self.values.resize(row_idx.len(), 0.0);
-        self.rhs.clear();
-        self.rhs.resize(n, 0.0);
-        self.x.clear();
-        self.x.resize(n, 0.0);
-        if self.iterative {
-            self.pattern = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
-            self.has_pattern = true;
-            return Ok(true);
-        }
 
         // With the identity ordering faer's symbolic analysis reads the upper triangle,
         // so it gets the transpose of our lower pattern.
