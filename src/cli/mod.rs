@@ -186,12 +186,15 @@ fn check(name: &str) -> Result<ExitCode, Failure> {
     let Resolved { scene, lines } = resolve_scene(Some(name))?;
     let model = validate(&scene, name, lines.as_ref())?;
     let effects = dda_core::Effects::of(&model);
+    let free = model.blocks.iter().filter(|b| !b.fixed).count();
+    let iterative = dda_core::iterative::solves_iteratively(model.params.solver, free);
     say(format_args!(
-        "{name}: ok: scene `{}`, {} blocks, detector {}, effects: {}",
+        "{name}: ok: scene `{}`, {} blocks, detector {}, effects: {}, solve: {}",
         model.name,
         model.blocks.len(),
         model.params.detector,
-        effects.names().join(", ")
+        effects.names().join(", "),
+        if iterative { "iterative" } else { "direct" }
     ));
     Ok(ExitCode::SUCCESS)
 }

@@ -460,6 +460,14 @@ impl Job {
             p.d_max
         );
         eprintln!("effects: {}", sim.effects().names().join(", "));
+        eprintln!(
+            "solve: {}",
+            if sim.solves_iteratively() {
+                "iterative (conjugate gradients, analysis.solver)"
+            } else {
+                "direct (sparse Cholesky factor, analysis.solver)"
+            }
+        );
         if self.marks.checkpoint_every > 0 {
             eprintln!(
                 "checkpoint every {} steps: {} (continue with `dda resume {}`)",

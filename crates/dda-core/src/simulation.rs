@@ -443,6 +443,11 @@ impl Simulation {
         self.n_free * self.nd
     }
 
+    /// Whether the global system is solved iteratively (`analysis.solver`).
+    pub fn solves_iteratively(&self) -> bool {
+        self.scratch.system.is_iterative()
+    }
+
     /// The solver's work so far: factorisations and low-rank solves.
     pub fn solver_counters(&self) -> SolverCounters {
         self.scratch.system.counters()
