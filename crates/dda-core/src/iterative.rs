@@ -1,10 +1,11 @@
 //! The engine's side of the iterative solve (`analysis.solver`, docs/method.md section
 //! 14): which scenes take it, where each attempt starts, and the data of its stop.
 //!
-//! A system solved iteratively has no factor, so the state predictor and the low-rank
-//! solves of the direct path are skipped: every open-close iteration assembles the whole
-//! matrix and solves it by conjugate gradients, started from the last iteration's motion
-//! (the first iteration of an attempt from the blocks' velocities times dt).
+//! A system solved iteratively has no factor, so there are no low-rank solves: every
+//! open-close iteration assembles the whole matrix and solves it by conjugate gradients,
+//! started from the last solve's motion (the first solve of an attempt from the blocks'
+//! velocities times dt), and the state predictor solves the step's own matrix
+//! (`open_close.rs`).
 
 use crate::assembly::StepRule;
 use crate::kinematics::{Mat6, t_rows};
