@@ -162,6 +162,25 @@ fn slides_for(text: &str, u: DVec2, slope: f64, phi: f64, duration: Option<f64>)
         .collect()
 }
 
+/// Asserts every block of the stack (or wall) of [`stack`] within 1% of the closed form
+/// after its run.
+fn stack_slides_as_one_body(
+    rows: usize,
+    per_row: usize,
+    bond: bool,
+    slope: f64,
+    phi: f64,
+    extra: &str,
+) {
+    let (text, u) = stack(rows, per_row, bond, slope, phi, extra);
+    for (k, r) in slides(&text, u, slope, phi).iter().enumerate() {
+        assert!(
+            (r - 1.0).abs() < 0.01,
+            "{slope}/{phi}: block {k} of {rows} x {per_row}: {r} of the closed form"
+        );
+    }
+}
+
 /// Stacks of 2 to 10 bricks and running-bond walls of 4 x 3, 6 x 4 and 8 x 3 bricks on
 /// inclines past their friction angle (40/30, 35/20, 50/40 and 30/25 degrees), as a
 /// user writes them (no key: settled before the run): every block within 1% of the
@@ -189,13 +208,7 @@ fn stacks_and_walls_slide_as_one_body() {
             (6, 4, true),
             (8, 3, true),
         ] {
-            let (text, u) = stack(rows, per_row, bond, slope, phi, "");
-            for (k, r) in slides(&text, u, slope, phi).iter().enumerate() {
-                assert!(
-                    (r - 1.0).abs() < 0.01,
-                    "{slope}/{phi}: block {k} of {rows} x {per_row}: {r} of the closed form"
-                );
-            }
+            stack_slides_as_one_body(rows, per_row, bond, slope, phi, "");
         }
     }
     let (text, u) = stack(2, 1, false, 40.0, 30.0, "settle = false");
@@ -322,13 +335,7 @@ fn walls_under_impact_steps_slide_as_one_body() {
 fn stacks_and_walls_solved_iteratively_slide_as_one_body() {
     for (slope, phi) in [(40.0, 30.0), (30.0, 25.0)] {
         for (rows, per_row, bond) in [(2, 1, false), (10, 1, false), (4, 3, true), (8, 3, true)] {
-            let (text, u) = stack(rows, per_row, bond, slope, phi, "solver = \"iterative\"");
-            for (k, r) in slides(&text, u, slope, phi).iter().enumerate() {
-                assert!(
-                    (r - 1.0).abs() < 0.01,
-                    "{slope}/{phi}: block {k} of {rows} x {per_row}: {r} of the closed form"
-                );
-            }
+            stack_slides_as_one_body(rows, per_row, bond, slope, phi, "solver = \"iterative\"");
         }
     }
 }

@@ -394,7 +394,7 @@ pub(crate) fn block_terms(
     let mut k = [[0.0; 6]; 6];
     let mut f = [0.0; 6];
     let average = rule == StepRule::Average;
-    let c2 = if average { 4.0 } else { 2.0 } / (dt * dt);
+    let c2 = rule.inertia_factor(dt);
     for a in 0..6 {
         for bb in 0..6 {
             k[a][bb] += c2 * mass[a][bb];
@@ -462,6 +462,18 @@ pub(crate) enum StepRule {
     Constant,
     /// Newmark's average acceleration.
     Average,
+}
+
+impl StepRule {
+    /// The factor c of the inertia term c M of a step of size `dt` under this rule:
+    /// 2 / dt^2 (constant acceleration) or 4 / dt^2 (average acceleration).
+    pub(crate) fn inertia_factor(self, dt: f64) -> f64 {
+        let c = match self {
+            StepRule::Constant => 2.0,
+            StepRule::Average => 4.0,
+        };
+        c / (dt * dt)
+    }
 }
 
 impl Simulation {

@@ -7,11 +7,10 @@
 //! velocities times dt), and the state predictor solves the step's own matrix
 //! (`open_close.rs`).
 
-use crate::assembly::StepRule;
-use crate::kinematics::{Mat6, t_rows};
+use crate::kinematics::{Mat6, Vec6, dot, t_rows};
 use crate::scene::SolverChoice;
 use crate::simulation::Simulation;
-use crate::solver::{Iterated, chol};
+use crate::solver::{Iterated, chol, forward_solve};
 
 /// Free blocks from which `solver = "auto"` solves iteratively. Measured on the paper's
 /// two-set column scaled up (docs/scaling.md, 0.1 s each, whole runs): iterative over
@@ -52,10 +51,7 @@ impl Simulation {
         if !self.scratch.iteration_ready {
             self.scratch.iteration_ready = true;
             let dt = self.scratch.attempt_dt;
-            let c = match self.step_rule() {
-                StepRule::Constant => 2.0,
-                StepRule::Average => 4.0,
-            } / (dt * dt);
+            let c = self.step_rule().inertia_factor(dt);
             let mut inertia = Vec::with_capacity(self.free_blocks.len());
             let mut reach = 0.0f64;
             for (f, &i) in self.free_blocks.iter().enumerate() {
@@ -86,17 +82,11 @@ impl Simulation {
 /// The largest eigenvalue of T I^-1 T^T for a vertex's two rows T and the Cholesky
 /// factor `l` of a block's inertia term I: how far the vertex can move per unit of the
 /// block's inertia-weighted error.
-fn vertex_reach(l: &Mat6, nd: usize, rows: &[[f64; 6]; 2]) -> f64 {
+fn vertex_reach(l: &Mat6, nd: usize, rows: &[Vec6; 2]) -> f64 {
     // y_k = L^-1 t_k; then the 2 x 2 Gram matrix of y_0 and y_1.
-    let forward = |t: &[f64; 6]| {
-        let mut y = [0.0f64; 6];
-        for i in 0..nd {
-            y[i] = (t[i] - (0..i).map(|k| l[i][k] * y[k]).sum::<f64>()) / l[i][i];
-        }
-        y
-    };
-    let (y0, y1) = (forward(&rows[0]), forward(&rows[1]));
-    let d = |a: &[f64; 6], b: &[f64; 6]| (0..nd).map(|k| a[k] * b[k]).sum::<f64>();
-    let (a, b, c) = (d(&y0, &y0), d(&y0, &y1), d(&y1, &y1));
+    let (mut y0, mut y1) = (rows[0], rows[1]);
+    forward_solve(l, nd, &mut y0);
+    forward_solve(l, nd, &mut y1);
+    let (a, b, c) = (dot(&y0, &y0, nd), dot(&y0, &y1, nd), dot(&y1, &y1, nd));
     0.5 * (a + c) + (0.25 * (a - c) * (a - c) + b * b).sqrt()
 }

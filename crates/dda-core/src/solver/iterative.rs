@@ -53,7 +53,7 @@ impl BlockSystem {
         self.metric.resize(self.nb, [[0.0; 6]; 6]);
         for (b, m) in inertia.iter().enumerate().take(self.nb) {
             let p = self.pos[b] as usize;
-            self.metric[p] = inverse_of(&chol(m, nd).unwrap_or_else(|| identity_chol(nd)), nd);
+            self.metric[p] = inverse_of(m, nd);
         }
     }
 
@@ -88,7 +88,7 @@ impl BlockSystem {
                     k[q][q + a] = *v;
                 }
             }
-            *d = inverse_of(&chol(&k, nd).unwrap_or_else(|| identity_chol(nd)), nd);
+            *d = inverse_of(&k, nd);
         }
         let mut work = std::mem::take(&mut self.work);
         work.resize(6 * n, 0.0);
@@ -106,23 +106,25 @@ impl BlockSystem {
                 }
                 apply(&diag, nd, r, z, sys.threads)
             };
+        // The bound on the motion's error of the residual r (w is scratch).
+        let bound = |sys: &Self, r: &[f64], w: &mut [f64]| {
+            (reach * apply(&sys.metric, nd, r, w, sys.threads))
+                .max(0.0)
+                .sqrt()
+        };
         let mut rz = residual(self, r, z, q, part);
         let (mut rz_old, mut restart) = (rz, true);
         loop {
             // D >= I (K >= I, block by block on the diagonal), so B = r^T I^-1 r >= r . z:
             // B is worth computing only once reach r . z is within the tolerance.
             if reach * rz <= tol * tol {
-                it.bound = (reach * apply(&self.metric, nd, r, w, self.threads))
-                    .max(0.0)
-                    .sqrt();
+                it.bound = bound(self, r, w);
                 if it.bound <= tol {
                     // The recurrence's residual drifts from the true one: the stop is
                     // confirmed on the true residual, and the directions start again
                     // from it if it fails.
                     rz = residual(self, r, z, q, part);
-                    it.bound = (reach * apply(&self.metric, nd, r, w, self.threads))
-                        .max(0.0)
-                        .sqrt();
+                    it.bound = bound(self, r, w);
                     if it.bound <= tol {
                         break;
                     }
@@ -131,9 +133,7 @@ impl BlockSystem {
             }
             if it.iterations == max_iter || !rz.is_finite() {
                 it.converged = false;
-                it.bound = (reach * apply(&self.metric, nd, r, w, self.threads))
-                    .max(0.0)
-                    .sqrt();
+                it.bound = bound(self, r, w);
                 break;
             }
             if restart {
@@ -239,14 +239,15 @@ fn block<const ND: usize>(v: &[f64], b: usize) -> &[f64; ND] {
         .expect("a block of ND values")
 }
 
-/// The inverse of a symmetric positive definite block from its Cholesky factor `l`
-/// (`nd` x `nd`), in full.
-fn inverse_of(l: &Mat6, nd: usize) -> Mat6 {
+/// The inverse of the leading `nd` x `nd` part of a symmetric positive definite block,
+/// in full (the identity for a block that is not numerically positive definite).
+fn inverse_of(a: &Mat6, nd: usize) -> Mat6 {
+    let l = chol(a, nd).unwrap_or_else(|| identity_chol(nd));
     let mut inv = [[0.0; 6]; 6];
     for j in 0..nd {
         let mut e = [0.0f64; 6];
         e[j] = 1.0;
-        chol_solve(l, nd, &mut e);
+        chol_solve(&l, nd, &mut e);
         for i in 0..nd {
             inv[i][j] = e[i];
         }
@@ -325,12 +326,17 @@ fn identity_chol(nd: usize) -> Mat6 {
     std::array::from_fn(|i| std::array::from_fn(|j| if i == j && i < nd { 1.0 } else { 0.0 }))
 }
 
-/// x <- (L L^T)^-1 x for the `nd` unknowns of one block.
-pub(crate) fn chol_solve(l: &Mat6, nd: usize, x: &mut [f64]) {
+/// x <- L^-1 x for the `nd` unknowns of one block.
+pub(crate) fn forward_solve(l: &Mat6, nd: usize, x: &mut [f64]) {
     for i in 0..nd {
         let s = x[i] - (0..i).map(|k| l[i][k] * x[k]).sum::<f64>();
         x[i] = s / l[i][i];
     }
+}
+
+/// x <- (L L^T)^-1 x for the `nd` unknowns of one block.
+pub(crate) fn chol_solve(l: &Mat6, nd: usize, x: &mut [f64]) {
+    forward_solve(l, nd, x);
     for i in (0..nd).rev() {
         let s = x[i] - (i + 1..nd).map(|k| l[k][i] * x[k]).sum::<f64>();
         x[i] = s / l[i][i];
