@@ -351,6 +351,9 @@ impl Simulation {
         if self.scratch.system.is_iterative() {
             let solved = self.solve_iteratively();
             watch.lap(rec, Phase::Solve);
+            self.scratch
+                .factored_springs
+                .clone_from(&self.scratch.springs);
             self.scratch.factor_current = true;
             return Ok(solved.converged);
         }

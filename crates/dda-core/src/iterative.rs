@@ -1,11 +1,12 @@
 //! The engine's side of the iterative solve (`analysis.solver`, docs/method.md section
 //! 14): which scenes take it, where each attempt starts, and the data of its stop.
 //!
-//! A system solved iteratively has no factor, so there are no low-rank solves: every
-//! open-close iteration assembles the whole matrix and solves it by conjugate gradients,
-//! started from the last solve's motion (the first solve of an attempt from the blocks'
-//! velocities times dt), and the state predictor solves the step's own matrix
-//! (`open_close.rs`).
+//! A system solved iteratively has no factor, so there are no low-rank solves. The
+//! state predictor assembles the step's own matrix and solves it; each open-close
+//! iteration after it adds the springs that changed since to the assembled matrix (or
+//! assembles anew when more changed than a new assembly adds) and solves by conjugate
+//! gradients, started from the last solve's motion (the first solve of an attempt from
+//! the blocks' velocities times dt; `open_close.rs`).
 
 use crate::kinematics::{Mat6, Vec6, dot, t_rows};
 use crate::scene::SolverChoice;

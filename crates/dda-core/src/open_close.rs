@@ -129,9 +129,27 @@ impl Simulation {
         self.state.totals.shear_springs += shear;
         self.state.totals.normal_springs += self.scratch.springs.len() as u64 - shear;
         self.state.totals.friction_forces += self.scratch.forces.len() as u64;
-        if self.scratch.factor_current
+        if self.scratch.system.is_iterative() {
+            // Changed springs are added to the matrix while they are fewer than the
+            // springs a new assembly would add.
+            let limit = self.scratch.springs.len().max(MAX_RANK);
+            if self.scratch.factor_current && self.spring_changes(limit).is_some() {
+                for t in &self.scratch.changes {
+                    self.scratch.system.add_rank_one(t);
+                }
+                self.scratch.system.clear_rhs();
+                self.assemble_rhs();
+                watch.lap(rec, Phase::Assembly);
+                let solved = self.solve_iteratively();
+                watch.lap(rec, Phase::Solve);
+                self.scratch
+                    .factored_springs
+                    .clone_from(&self.scratch.springs);
+                return Ok(solved.converged);
+            }
+        } else if self.scratch.factor_current
             && self.scratch.system.is_factored()
-            && self.spring_changes().is_some()
+            && self.spring_changes(MAX_RANK).is_some()
         {
             self.force_changes();
             watch.lap(rec, Phase::Assembly);
@@ -149,10 +167,10 @@ impl Simulation {
         self.assemble_and_factorise(rec)
     }
 
-    /// The difference between the springs in effect and those in the factorised matrix,
-    /// as rank-one terms (both lists are in contact order); None if it has more than
-    /// [`MAX_RANK`] terms.
-    pub(crate) fn spring_changes(&mut self) -> Option<()> {
+    /// The difference between the springs in effect and those in the factorised (or,
+    /// solved iteratively, assembled) matrix, as rank-one terms (both lists are in
+    /// contact order); None if it has more than `limit` terms.
+    pub(crate) fn spring_changes(&mut self, limit: usize) -> Option<()> {
         self.scratch.changes.clear();
         self.scratch.rhs_changes.clear();
         let (now, then) = (&self.scratch.springs, &self.scratch.factored_springs);
@@ -182,7 +200,7 @@ impl Simulation {
                 c: row.c,
                 s: -p * row.g0,
             });
-            changes.len() <= MAX_RANK
+            changes.len() <= limit
         };
         while i < now.len() || j < then.len() {
             let key = |s: &Spring| (s.contact, s.shear);

@@ -535,12 +535,14 @@ impl Simulation {
             self.base_terms(dt);
             self.set_force_scale();
             watch.lap(&mut rec, Phase::Assembly);
+            // The first OCI iteration of every attempt factorises its own matrix (solved
+            // iteratively: starts from the one the state predictor assembled, of this
+            // attempt too).
+            self.scratch.factor_current = false;
             if first_attempt {
                 self.predict_states(&mut rec)?;
                 first_attempt = false;
             }
-            // The first OCI iteration of every attempt factorises its own matrix.
-            self.scratch.factor_current = false;
             let (converged, iterations) = self.open_close_iteration(&mut rec)?;
             self.state.totals.oci_iterations += iterations as u64;
             let reason;

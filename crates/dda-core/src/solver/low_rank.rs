@@ -200,6 +200,25 @@ pub struct RankOne {
     pub s: f64,
 }
 
+impl BlockSystem {
+    /// Adds the rank-one term `t` (s u u^T over its blocks' rows u) to the matrix: a
+    /// spring's change applied to the assembled values, for a system solved
+    /// iteratively (a factor is not updated). Its blocks, if both free, must be a pair
+    /// of the pattern.
+    pub fn add_rank_one(&mut self, t: &RankOne) {
+        for (f, c) in t.blocks.iter().zip(&t.c) {
+            if let Some(f) = *f {
+                self.add_outer(self.diagonal(f), f, f, t.s, c, c);
+            }
+        }
+        if let [Some(a), Some(b)] = t.blocks
+            && let Some(e) = self.entry(a, b)
+        {
+            self.add_outer(e, a, b, t.s, &t.c[0], &t.c[1]);
+        }
+    }
+}
+
 /// Solves the dense `k x k` system `a x = b` (row-major `a`, overwritten) by LU with
 /// partial pivoting, leaving x in `b`; false if a pivot vanishes.
 fn lu_solve_in_place(a: &mut [f64], b: &mut [f64], k: usize) -> bool {

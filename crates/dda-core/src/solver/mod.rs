@@ -179,6 +179,10 @@ pub struct BlockSystem {
     pub(super) diag_inverse: Vec<Mat6>,
     pub(super) metric: Vec<Mat6>,
     pub(super) work: Vec<f64>,
+    /// The iterative layout's entries below the diagonal whose block column lies in the
+    /// first half of the blocks and block row in the second, with their columns: the
+    /// second half's rows of a product read them (`BlockSystem::multiply`).
+    pub(super) crossing: Vec<(u32, u32)>,
 }
 
 impl std::fmt::Debug for BlockSystem {
@@ -232,6 +236,7 @@ impl Default for BlockSystem {
             diag_inverse: Vec::new(),
             metric: Vec::new(),
             work: Vec::new(),
+            crossing: Vec::new(),
         }
     }
 }
@@ -330,6 +335,15 @@ impl BlockSystem {
                 for q in 0..nd {
                     self.entry_col[e * nd + q] = off;
                     off += if self.entry_diag[e] { nd - q } else { nd };
+                }
+            }
+            let half = nb / 2;
+            self.crossing.clear();
+            for jb in 0..half {
+                for e in self.col_start[jb] + 1..self.col_start[jb + 1] {
+                    if self.col_rows[e] as usize >= half {
+                        self.crossing.push((e as u32, jb as u32));
+                    }
                 }
             }
             self.values.clear();
