@@ -183,6 +183,11 @@ struct Job {
 /// measurements.csv (measured points) and bolts.csv (bolts).
 const TABLES: [&str; 2] = ["measurements.csv", "bolts.csv"];
 
+/// Wall time between the progress lines of a run whose standard error is not a
+/// terminal (in place of the progress bar): a batch job's log says how far a long run
+/// has come.
+const PROGRESS_EVERY: std::time::Duration = std::time::Duration::from_secs(30);
+
 /// Runs `dda run`.
 pub fn run(args: RunArgs) -> Result<ExitCode, Failure> {
     let source = args
@@ -627,6 +632,9 @@ impl Job {
         } else {
             None
         };
+        // Without a terminal (a batch job, a log), a line every PROGRESS_EVERY instead.
+        let mut logged = (!self.quiet && bar.is_none()).then(std::time::Instant::now);
+        let started = std::time::Instant::now();
         let duration = self.sim.model().params.duration;
         // --max-steps counts this process's steps (a resumed run's from where it resumed).
         let first = self.sim.totals().steps;
@@ -676,6 +684,23 @@ impl Job {
                     if let Some(bar) = &bar {
                         bar.set_position((1000.0 * self.sim.time() / duration) as u64);
                         bar.set_message(format!("{:.4}", self.sim.time()));
+                    }
+                    if let Some(last) = logged.as_mut()
+                        && last.elapsed() >= PROGRESS_EVERY
+                    {
+                        *last = std::time::Instant::now();
+                        let totals = self.sim.totals();
+                        eprintln!(
+                            "t = {:.6} s of {duration} s ({:.0}%): {} steps, {} OCI iterations, \
+                             {} dt cuts, dt {:.3e} s; {:.0} s of wall time",
+                            self.sim.time(),
+                            100.0 * self.sim.time() / duration,
+                            totals.steps,
+                            totals.oci_iterations,
+                            totals.cuts,
+                            rec.dt,
+                            started.elapsed().as_secs_f64()
+                        );
                     }
                 }
                 Err(e) => {
