@@ -231,14 +231,21 @@ impl BlockSystem {
     ) -> f64 {
         let first = rows.start;
         y.fill(0.0);
+        // The iterative layout keeps the entries' values in entry order, each entry's
+        // columns together (`BlockSystem::set_pattern`): they are read in one pass, from
+        // the first entry of the first column of `rows` on, with no offsets looked up.
+        let mut off = match rows.is_empty() {
+            true => 0,
+            false => self.entry_col[self.col_start[first] * ND],
+        };
         for jb in rows.clone() {
             let (s, e_end) = (self.col_start[jb], self.col_start[jb + 1]);
             let xj: [f64; ND] = *block(x, jb);
             let mut yj = [0.0f64; ND];
             // The diagonal block: column q's rows q.. of the block.
             for q in 0..ND {
-                let base = self.entry_col[s * ND + q];
-                let col = &self.values[base..base + ND - q];
+                let col = &self.values[off..off + ND - q];
+                off += ND - q;
                 yj[q] += col[0] * xj[q];
                 for a in 1..ND - q {
                     yj[q + a] += col[a] * xj[q];
@@ -248,19 +255,23 @@ impl BlockSystem {
             for e in s + 1..e_end {
                 let ib = self.col_rows[e] as usize;
                 let xi: &[f64; ND] = block(x, ib);
+                let values = &self.values[off..off + ND * ND];
+                off += ND * ND;
                 if ib >= rows.end {
                     // A row of the other half: only its transpose's share is ours.
                     for q in 0..ND {
-                        let base = self.entry_col[e * ND + q];
-                        let col: &[f64; ND] = block(&self.values[base..], 0);
-                        yj[q] += (0..ND).map(|a| col[a] * xi[a]).sum::<f64>();
+                        let col: &[f64; ND] = block(values, q);
+                        let mut acc = 0.0;
+                        for a in 0..ND {
+                            acc += col[a] * xi[a];
+                        }
+                        yj[q] += acc;
                     }
                     continue;
                 }
                 let mut yi = [0.0f64; ND];
                 for q in 0..ND {
-                    let base = self.entry_col[e * ND + q];
-                    let col: &[f64; ND] = block(&self.values[base..], 0);
+                    let col: &[f64; ND] = block(values, q);
                     let mut acc = 0.0;
                     for a in 0..ND {
                         yi[a] += col[a] * xj[q];
@@ -276,9 +287,10 @@ impl BlockSystem {
             let (e, jb) = (e as usize, jb as usize);
             let xj: &[f64; ND] = block(x, jb);
             let mut yi = [0.0f64; ND];
+            let base = self.entry_col[e * ND];
+            let values = &self.values[base..base + ND * ND];
             for q in 0..ND {
-                let base = self.entry_col[e * ND + q];
-                let col: &[f64; ND] = block(&self.values[base..], 0);
+                let col: &[f64; ND] = block(values, q);
                 for a in 0..ND {
                     yi[a] += col[a] * xj[q];
                 }
