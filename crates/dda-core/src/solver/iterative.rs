@@ -78,19 +78,25 @@ impl BlockSystem {
         if n == 0 {
             return it;
         }
-        // The inverses of the diagonal blocks: the preconditioner D^-1.
+        // The inverses of the diagonal blocks: the preconditioner D^-1, made again only
+        // for the blocks whose diagonal changed since.
         let mut diag = std::mem::take(&mut self.diag_inverse);
-        diag.resize(nb, [[0.0; 6]; 6]);
+        if diag.len() != nb {
+            diag.resize(nb, [[0.0; 6]; 6]);
+            self.stale.fill(true);
+        }
         let half = nb / 2;
         {
             let (d0, d1) = diag.split_at_mut(half);
-            let invert = |d: &mut [Mat6], first: usize| {
-                for (j, d) in d.iter_mut().enumerate() {
+            let (s0, s1) = self.stale.split_at(half);
+            let invert = |d: &mut [Mat6], stale: &[bool], first: usize| {
+                for (j, (d, _)) in d.iter_mut().zip(stale).enumerate().filter(|(_, (_, s))| **s) {
                     *d = inverse_of(&self.diagonal_block(first + j), nd);
                 }
             };
-            both(self.threads, || invert(d0, 0), || invert(d1, half));
+            both(self.threads, || invert(d0, s0, 0), || invert(d1, s1, half));
         }
+        self.stale.fill(false);
         let split = half * nd;
         let mut work = std::mem::take(&mut self.work);
         work.resize(5 * n, 0.0);

@@ -183,6 +183,9 @@ pub struct BlockSystem {
     /// first half of the blocks and block row in the second, with their columns: the
     /// second half's rows of a product read them (`BlockSystem::multiply`).
     pub(super) crossing: Vec<(u32, u32)>,
+    /// Per block (in the pattern's order): whether its diagonal block changed since the
+    /// iterative solve last inverted it (cleared and refilled, or a term added).
+    pub(super) stale: Vec<bool>,
 }
 
 impl std::fmt::Debug for BlockSystem {
@@ -237,6 +240,7 @@ impl Default for BlockSystem {
             metric: Vec::new(),
             work: Vec::new(),
             crossing: Vec::new(),
+            stale: Vec::new(),
         }
     }
 }
@@ -319,6 +323,8 @@ impl BlockSystem {
         self.rhs.resize(n, 0.0);
         self.x.clear();
         self.x.resize(n, 0.0);
+        self.stale.clear();
+        self.stale.resize(nb, true);
         self.entry_diag.clear();
         self.entry_diag.resize(self.col_rows.len(), false);
         for jb in 0..nb {
@@ -472,6 +478,7 @@ impl BlockSystem {
     /// Zeroes the matrix values and the right-hand side, keeping the pattern.
     pub fn clear(&mut self) {
         self.factored = false;
+        self.stale.fill(true);
         self.values.fill(0.0);
         self.rhs.fill(0.0);
     }
@@ -508,6 +515,7 @@ impl BlockSystem {
         self.factored = false;
         let nd = self.nd;
         let e = self.diagonal(i).0 as usize;
+        self.stale[self.pos[i as usize] as usize] = true;
         for q in 0..nd {
             let base = self.entry_col[e * nd + q];
             for (a, v) in self.values[base..base + nd - q].iter_mut().enumerate() {
@@ -524,6 +532,7 @@ impl BlockSystem {
         let nd = self.nd;
         let e = entry.0 as usize;
         if self.entry_diag[e] {
+            self.stale[self.pos[i as usize] as usize] = true;
             for q in 0..nd {
                 let base = self.entry_col[e * nd + q];
                 let sv = s * v[q];
