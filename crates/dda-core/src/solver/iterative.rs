@@ -90,8 +90,10 @@ impl BlockSystem {
             let (d0, d1) = diag.split_at_mut(half);
             let (s0, s1) = self.stale.split_at(half);
             let invert = |d: &mut [Mat6], stale: &[bool], first: usize| {
-                for (j, (d, _)) in d.iter_mut().zip(stale).enumerate().filter(|(_, (_, s))| **s) {
-                    *d = inverse_of(&self.diagonal_block(first + j), nd);
+                for (j, (d, &stale)) in d.iter_mut().zip(stale).enumerate() {
+                    if stale {
+                        *d = inverse_of(&self.diagonal_block(first + j), nd);
+                    }
                 }
             };
             both(self.threads, || invert(d0, s0, 0), || invert(d1, s1, half));
@@ -142,9 +144,11 @@ impl BlockSystem {
                 it.bound = bound(self, r, w);
                 break;
             }
-            let beta = if restart { 0.0 } else { rz / rz_old };
-            restart = false;
-            {
+            if restart {
+                p.copy_from_slice(z);
+                restart = false;
+            } else {
+                let beta = rz / rz_old;
                 let (p0, p1) = p.split_at_mut(split);
                 let (z0, z1) = z.split_at(split);
                 let turn = |p: &mut [f64], z: &[f64]| {
@@ -240,9 +244,10 @@ impl BlockSystem {
         // The iterative layout keeps the entries' values in entry order, each entry's
         // columns together (`BlockSystem::set_pattern`): they are read in one pass, from
         // the first entry of the first column of `rows` on, with no offsets looked up.
-        let mut off = match rows.is_empty() {
-            true => 0,
-            false => self.entry_col[self.col_start[first] * ND],
+        let mut off = if rows.is_empty() {
+            0
+        } else {
+            self.entry_col[self.col_start[first] * ND]
         };
         for jb in rows.clone() {
             let (s, e_end) = (self.col_start[jb], self.col_start[jb + 1]);
