@@ -348,23 +348,27 @@ impl Simulation {
         self.bolt_couplings();
         self.assemble_rhs();
         watch.lap(rec, Phase::Assembly);
-        if self.scratch.system.is_iterative() {
-            let solved = self.solve_iteratively();
-            watch.lap(rec, Phase::Solve);
+        let solved = if self.scratch.system.is_iterative() {
+            self.solve_iteratively().converged
+        } else {
             self.scratch
-                .factored_springs
-                .clone_from(&self.scratch.springs);
-            self.scratch.factor_current = true;
-            return Ok(solved.converged);
-        }
-        self.scratch
-            .system
-            .solve()
-            .map_err(|source| SimError::Solve {
-                t: self.state.t,
-                source,
-            })?;
+                .system
+                .solve()
+                .map_err(|source| SimError::Solve {
+                    t: self.state.t,
+                    source,
+                })?;
+            true
+        };
         watch.lap(rec, Phase::Solve);
+        self.keep_assembled();
+        Ok(solved)
+    }
+
+    /// Records the springs and friction forces in effect as those of the matrix just
+    /// factorised or assembled, of this attempt: the next OCI iteration's changes are
+    /// counted from them.
+    pub(crate) fn keep_assembled(&mut self) {
         self.scratch
             .factored_springs
             .clone_from(&self.scratch.springs);
@@ -372,7 +376,6 @@ impl Simulation {
             .factored_forces
             .clone_from(&self.scratch.forces);
         self.scratch.factor_current = true;
-        Ok(true)
     }
 }
 

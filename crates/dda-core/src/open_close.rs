@@ -130,21 +130,27 @@ impl Simulation {
         self.state.totals.normal_springs += self.scratch.springs.len() as u64 - shear;
         self.state.totals.friction_forces += self.scratch.forces.len() as u64;
         if self.scratch.system.is_iterative() {
-            // Changed springs are added to the matrix while they are fewer than the
-            // springs a new assembly would add.
+            // Changed springs (and friction forces) are added to the matrix and the
+            // right-hand side while they are fewer than the springs a new assembly
+            // would add.
             let limit = self.scratch.springs.len().max(MAX_RANK);
             if self.scratch.factor_current && self.spring_changes(limit).is_some() {
+                self.force_changes();
+                let system = &mut self.scratch.system;
                 for t in &self.scratch.changes {
-                    self.scratch.system.add_rank_one(t);
+                    system.add_rank_one(t);
                 }
-                self.scratch.system.clear_rhs();
-                self.assemble_rhs();
+                for t in &self.scratch.rhs_changes {
+                    for (b, c) in t.blocks.iter().zip(&t.c) {
+                        if let Some(b) = *b {
+                            system.add_rhs(b, t.s, c);
+                        }
+                    }
+                }
                 watch.lap(rec, Phase::Assembly);
                 let solved = self.solve_iteratively();
                 watch.lap(rec, Phase::Solve);
-                self.scratch
-                    .factored_springs
-                    .clone_from(&self.scratch.springs);
+                self.keep_assembled();
                 return Ok(solved.converged);
             }
         } else if self.scratch.factor_current

@@ -182,7 +182,6 @@ impl BlockSystem {
             };
             it.iterations += 1;
         }
-        self.rhs.copy_from_slice(&self.x);
         self.diag_inverse = diag;
         self.work = work;
         self.counters.iterative += 1;

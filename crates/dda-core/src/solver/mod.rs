@@ -569,7 +569,9 @@ impl BlockSystem {
     /// The solution for block `i` after [`BlockSystem::solve`].
     pub fn solution(&self, i: u32) -> &[f64] {
         let p = self.pos[i as usize] as usize;
-        &self.rhs[p * self.nd..(p + 1) * self.nd]
+        // Solved iteratively, the right-hand side is kept (the next solve changes it).
+        let x = if self.iterative { &self.x } else { &self.rhs };
+        &x[p * self.nd..(p + 1) * self.nd]
     }
 }
 
