@@ -212,6 +212,41 @@ fn threads_give_the_same_steps_bit_for_bit() {
     assert_eq!(untimed_state(&with), untimed_state(&without));
 }
 
+/// A column large enough that the contact law decides its contacts in two halves
+/// (`dda_core::PARALLEL_MIN_CONTACTS`) takes the same steps and ends in the same state,
+/// bit for bit, with the halves on two threads (`RunOptions::parallel`) as with the
+/// whole list decided in one pass on one.
+#[test]
+fn the_contact_law_decides_alike_in_halves() {
+    let column = dda_bench::PAPER_COLUMNS[3];
+    let blocks = column.scaled_blocks((4_000.0 / column.blocks as f64).sqrt());
+    let mut analysis = column.analysis();
+    analysis.frames = 0;
+    let model = dda_bench::column_scene("column", &blocks, analysis)
+        .validate()
+        .unwrap();
+    let run = |parallel: bool| {
+        let mut sim = Simulation::new(
+            model.clone(),
+            RunOptions {
+                parallel,
+                ..RunOptions::default()
+            },
+        );
+        let recs: Vec<StepRecord> = (0..4).map(|_| untimed(&sim.step().unwrap())).collect();
+        let mut snap = sim.snapshot();
+        let t = &mut snap.state.totals;
+        (t.total_s, t.detection_s, t.assembly_s, t.solve_s) = (0.0, 0.0, 0.0, 0.0);
+        assert!(
+            snap.state.contacts.len() >= dda_core::PARALLEL_MIN_CONTACTS,
+            "{} contacts: too few to be decided in halves",
+            snap.state.contacts.len()
+        );
+        (recs, snap)
+    };
+    assert_eq!(run(true), run(false));
+}
+
 /// The 826-block column solved iteratively (its products taken in two halves, on two
 /// threads, `solver::iterative`) takes the same steps and ends in the same state, bit
 /// for bit, in thread pools of 1, 2 and 4 threads.

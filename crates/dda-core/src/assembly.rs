@@ -181,26 +181,13 @@ impl Simulation {
             .for_each(terms);
     }
 
-    /// The joint of a contact: none (no friction, cohesion or tension) for a
-    /// vertex-vertex contact, which carries a normal spring only
-    /// (`Contact::vertex_vertex`); else the glue between parts of one body, the joint
-    /// its edge names, or that of its blocks' materials (`Model::joint_of_contact`).
+    /// The joint of contact `k` (see [`joint_of`]).
     pub(crate) fn joint(&self, k: usize) -> JointProps {
-        let c = &self.state.contacts.contacts[k];
-        if c.vertex_vertex {
-            return JointProps::default();
-        }
-        if self.model.joints_by_edge {
-            return *self.model.joint_of_contact(
-                c.key.vertex_block as usize,
-                c.key.edge_block as usize,
-                c.key.edge as usize,
-            );
-        }
-        let m = |b: u32| self.material[b as usize] as usize;
-        *self
-            .model
-            .joint_of_materials(m(c.key.vertex_block), m(c.key.edge_block))
+        joint_of(
+            &self.model,
+            &self.material,
+            &self.state.contacts.contacts[k],
+        )
     }
 
     /// Sets the half step of every block for an attempt of size `dt` and the contacts'
@@ -377,6 +364,25 @@ impl Simulation {
             .clone_from(&self.scratch.forces);
         self.scratch.factor_current = true;
     }
+}
+
+/// The joint of contact `c` in `model` (`material`: each block's material index): none
+/// (no friction, cohesion or tension) for a vertex-vertex contact, which carries a normal
+/// spring only (`Contact::vertex_vertex`); else the glue between parts of one body, the
+/// joint its edge names, or that of its blocks' materials (`Model::joint_of_contact`).
+pub(crate) fn joint_of(model: &Model, material: &[u32], c: &Contact) -> JointProps {
+    if c.vertex_vertex {
+        return JointProps::default();
+    }
+    if model.joints_by_edge {
+        return *model.joint_of_contact(
+            c.key.vertex_block as usize,
+            c.key.edge_block as usize,
+            c.key.edge as usize,
+        );
+    }
+    let m = |b: u32| material[b as usize] as usize;
+    *model.joint_of_materials(m(c.key.vertex_block), m(c.key.edge_block))
 }
 
 /// A free block's terms that do not depend on contacts, at step size `dt` under `rule`:

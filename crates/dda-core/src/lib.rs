@@ -39,6 +39,7 @@ mod update;
 
 pub use self::bolts::{BoltState, affine_coordinates, from_affine};
 pub use self::checkpoint::{Checkpoint, CheckpointError};
+pub use self::contact_law::PARALLEL_MIN_CONTACTS;
 pub use self::diagnosis::{ContactNote, Diagnosis, SimError};
 pub use self::effects::Effects;
 pub use self::guard::{ENERGY_TOLERANCE, EnergyBalance, Violation};
