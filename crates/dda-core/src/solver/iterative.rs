@@ -26,7 +26,6 @@
 //! of blocks cut the iterations to a half but not the matrix products (`docs/scaling.md`).
 
 use super::BlockSystem;
-use super::sweeps::dot;
 use crate::kinematics::Mat6;
 
 /// The outcome of an iterative solve.
@@ -53,7 +52,7 @@ impl BlockSystem {
     /// until set again (it changes with dt and the blocks' shapes, once an attempt).
     pub fn set_inertia(&mut self, inertia: &[Mat6]) {
         let nd = self.nd;
-        self.metric.resize(self.nb, [[0.0; 6]; 6]);
+        self.metric.resize(self.nb, [0.0; 21]);
         for (b, m) in inertia.iter().enumerate().take(self.nb) {
             let p = self.pos[b] as usize;
             self.metric[p] = inverse_of(m, nd);
@@ -82,14 +81,14 @@ impl BlockSystem {
         // for the blocks whose diagonal changed since.
         let mut diag = std::mem::take(&mut self.diag_inverse);
         if diag.len() != nb {
-            diag.resize(nb, [[0.0; 6]; 6]);
+            diag.resize(nb, [0.0; 21]);
             self.stale.fill(true);
         }
         let half = nb / 2;
         {
             let (d0, d1) = diag.split_at_mut(half);
             let (s0, s1) = self.stale.split_at(half);
-            let invert = |d: &mut [Mat6], stale: &[bool], first: usize| {
+            let invert = |d: &mut [Packed], stale: &[bool], first: usize| {
                 for (j, (d, &stale)) in d.iter_mut().zip(stale).enumerate() {
                     if stale {
                         *d = inverse_of(&self.diagonal_block(first + j), nd);
@@ -226,11 +225,12 @@ impl BlockSystem {
     }
 
     /// The block rows `rows` of y = K x into `y` (those rows alone), for blocks of `ND`
-    /// unknowns: the block columns `rows`, each entry below the diagonal serving both its
-    /// block rows (both lie in `rows`: rows below a column of `rows` are in it, the
-    /// halves being the first and the last blocks), then the entries of `crossing`,
-    /// (entry, column) from columns before `rows`, for their rows. Returns x . y over the
-    /// rows.
+    /// unknowns: the entries of `crossing`, (entry, column) from columns before `rows`,
+    /// for their rows, then the block columns `rows`, each entry below the diagonal
+    /// serving both its block rows (both lie in `rows`, unless a row of the second half
+    /// below a column of the first: there only its transpose's share is taken). Returns
+    /// x . y over the rows, each row's share taken once its column is done (the row is
+    /// complete then).
     fn product_rows<const ND: usize>(
         &self,
         x: &[f64],
@@ -240,6 +240,23 @@ impl BlockSystem {
     ) -> f64 {
         let first = rows.start;
         y.fill(0.0);
+        // The entries from the other half first, so that each row is complete once its
+        // own column is done, and its share of x . y is taken then.
+        for &(e, jb) in crossing {
+            let (e, jb) = (e as usize, jb as usize);
+            let xj: &[f64; ND] = block(x, jb);
+            let mut yi = [0.0f64; ND];
+            let base = self.entry_col[e * ND];
+            let values = &self.values[base..base + ND * ND];
+            for q in 0..ND {
+                let col: &[f64; ND] = block(values, q);
+                for a in 0..ND {
+                    yi[a] += col[a] * xj[q];
+                }
+            }
+            add_to(y, self.col_rows[e] as usize - first, yi);
+        }
+        let mut xy = 0.0;
         // The iterative layout keeps the entries' values in entry order, each entry's
         // columns together (`BlockSystem::set_pattern`): they are read in one pass, from
         // the first entry of the first column of `rows` on, with no offsets looked up.
@@ -292,22 +309,10 @@ impl BlockSystem {
                 add_to(y, ib - first, yi);
             }
             add_to(y, jb - first, yj);
+            let row: &[f64; ND] = block(y, jb - first);
+            xy += (0..ND).map(|q| xj[q] * row[q]).sum::<f64>();
         }
-        for &(e, jb) in crossing {
-            let (e, jb) = (e as usize, jb as usize);
-            let xj: &[f64; ND] = block(x, jb);
-            let mut yi = [0.0f64; ND];
-            let base = self.entry_col[e * ND];
-            let values = &self.values[base..base + ND * ND];
-            for q in 0..ND {
-                let col: &[f64; ND] = block(values, q);
-                for a in 0..ND {
-                    yi[a] += col[a] * xj[q];
-                }
-            }
-            add_to(y, self.col_rows[e] as usize - first, yi);
-        }
-        dot(&x[first * ND..rows.end * ND], y)
+        xy
     }
 }
 
@@ -322,7 +327,7 @@ fn add_to<const ND: usize>(y: &mut [f64], b: usize, v: [f64; ND]) {
 /// z = D^-1 r with the blocks' inverses `diag`; returns r . z over them.
 #[allow(clippy::too_many_arguments)]
 fn descend(
-    diag: &[Mat6],
+    diag: &[Packed],
     nd: usize,
     alpha: f64,
     p: &[f64],
@@ -351,9 +356,24 @@ fn block<const ND: usize>(v: &[f64], b: usize) -> &[f64; ND] {
         .expect("a block of ND values")
 }
 
-/// The inverse of the leading `nd` x `nd` part of a symmetric positive definite block,
-/// in full (the identity for a block that is not numerically positive definite).
-fn inverse_of(a: &Mat6, nd: usize) -> Mat6 {
+/// A symmetric 6 x 6 block by its lower triangle, row by row: entry (i, k), k <= i, at
+/// i (i + 1) / 2 + k, so that the leading 3 x 3 part comes first. 21 values instead of
+/// 36: the preconditioner and the bound are read at every iteration, from memory.
+pub(crate) type Packed = [f64; 21];
+
+/// Where entry (i, k) of a symmetric block lies in its [`Packed`] form.
+const fn packed(i: usize, k: usize) -> usize {
+    if k <= i {
+        i * (i + 1) / 2 + k
+    } else {
+        k * (k + 1) / 2 + i
+    }
+}
+
+/// The inverse of the leading `nd` x `nd` part of a symmetric positive definite block
+/// (the identity for a block that is not numerically positive definite), made
+/// symmetric (the mean of its two triangles, which differ by rounding) and packed.
+fn inverse_of(a: &Mat6, nd: usize) -> Packed {
     let l = chol(a, nd).unwrap_or_else(|| identity_chol(nd));
     let mut inv = [[0.0; 6]; 6];
     for j in 0..nd {
@@ -364,18 +384,24 @@ fn inverse_of(a: &Mat6, nd: usize) -> Mat6 {
             inv[i][j] = e[i];
         }
     }
-    inv
+    let mut out = [0.0; 21];
+    for i in 0..nd {
+        for k in 0..=i {
+            out[packed(i, k)] = 0.5 * (inv[i][k] + inv[k][i]);
+        }
+    }
+    out
 }
 
-/// z = A_b r_b block by block, for full blocks `a` of `ND` unknowns; returns r . z.
-fn apply_blocks<const ND: usize>(a: &[Mat6], r: &[f64], z: &mut [f64]) -> f64 {
+/// z = A_b r_b block by block, for symmetric blocks `a` of `ND` unknowns; returns r . z.
+fn apply_blocks<const ND: usize>(a: &[Packed], r: &[f64], z: &mut [f64]) -> f64 {
     let mut sum = 0.0;
     for ((m, rb), zb) in a.iter().zip(r.chunks_exact(ND)).zip(z.chunks_exact_mut(ND)) {
         let rb: &[f64; ND] = rb.try_into().expect("a block");
         for i in 0..ND {
             let mut acc = 0.0;
             for k in 0..ND {
-                acc += m[i][k] * rb[k];
+                acc += m[packed(i, k)] * rb[k];
             }
             zb[i] = acc;
             sum += acc * rb[i];
@@ -387,12 +413,12 @@ fn apply_blocks<const ND: usize>(a: &[Mat6], r: &[f64], z: &mut [f64]) -> f64 {
 /// [`apply_blocks`] for blocks of `nd` unknowns, in two halves of the blocks (on two
 /// threads when `threads` is set) whose sums are added in a fixed order: the same result
 /// either way.
-fn apply(a: &[Mat6], nd: usize, r: &[f64], z: &mut [f64], threads: bool) -> f64 {
+fn apply(a: &[Packed], nd: usize, r: &[f64], z: &mut [f64], threads: bool) -> f64 {
     let half = a.len() / 2;
     let (a0, a1) = a.split_at(half);
     let (r0, r1) = r.split_at(half * nd);
     let (z0, z1) = z.split_at_mut(half * nd);
-    let one = |a: &[Mat6], r: &[f64], z: &mut [f64]| match nd {
+    let one = |a: &[Packed], r: &[f64], z: &mut [f64]| match nd {
         6 => apply_blocks::<6>(a, r, z),
         3 => apply_blocks::<3>(a, r, z),
         nd => unreachable!("blocks of {nd} unknowns"),

@@ -176,8 +176,8 @@ pub struct BlockSystem {
     pub(super) x: Vec<f64>,
     /// The iterative solve's inverses of the diagonal blocks (its preconditioner) and of
     /// the inertia terms (its bound), and its work vectors.
-    pub(super) diag_inverse: Vec<Mat6>,
-    pub(super) metric: Vec<Mat6>,
+    pub(super) diag_inverse: Vec<iterative::Packed>,
+    pub(super) metric: Vec<iterative::Packed>,
     pub(super) work: Vec<f64>,
     /// The iterative layout's entries below the diagonal whose block column lies in the
     /// first half of the blocks and block row in the second, with their columns: the
