@@ -315,8 +315,10 @@ impl Simulation {
     }
 }
 
-/// Fewest contacts for which [`Simulation::update_states`] decides on two threads:
-/// below it, waking the pool costs more than it saves. Our choice, about the contacts of
+/// Fewest contacts for which the contact law decides the open-close iteration's states
+/// on two threads, in two halves of the contact list (where the system is solved
+/// iteratively or [`crate::RunOptions::parallel`] is on): below it, waking the pool
+/// costs more than it saves. Our choice, about the contacts of
 /// 4,000 blocks; on the 28,325-block column's first 15 steps the assembly phase (where
 /// the decisions are counted) took 1.65-1.73 s against 1.84-1.94 s on one thread, three
 /// alternating runs.
