@@ -244,53 +244,52 @@ impl Simulation {
         let (rows, shapes, half, d) = (&sc.rows, &sc.shapes, &sc.half, &sc.d);
         let (sheared, scale, motions) = (&sc.sheared, &sc.force_scale, &sc.motions);
         // Decides the contacts of `contacts` (the list's from `first` on), counting
-        // each one's changes of state in `flips` where it has them; returns the
-        // contacts that changed state or sliding direction.
-        let run = |first: usize, contacts: &mut [Contact], flips: &mut [u8]| {
-            let mut flipped = Vec::new();
-            for (i, slot) in contacts.iter_mut().enumerate() {
-                let (k, c) = (first + i, *slot);
-                if !c.active {
-                    continue;
+        // each one's changes of state in `flips` where it has them, and lists in
+        // `flipped` the contacts that changed state or sliding direction.
+        let run =
+            |first: usize, contacts: &mut [Contact], flips: &mut [u8], flipped: &mut Vec<u32>| {
+                for (i, slot) in contacts.iter_mut().enumerate() {
+                    let (k, c) = (first + i, *slot);
+                    if !c.active {
+                        continue;
+                    }
+                    let key = c.key;
+                    let trial = Trial {
+                        d: rows[k].eval(d),
+                        // The force below which a change is negligible (see the module
+                        // docs).
+                        band: DECISION_BAND
+                            * scale[key.vertex_block as usize].min(scale[key.edge_block as usize]),
+                    };
+                    let joint = joint_of(model, material, &c);
+                    let decide_at = |trial: Trial| {
+                        decide(
+                            &c,
+                            &joint,
+                            &law,
+                            trial,
+                            |anchor| sheared.row(k, anchor, &c, shapes, half).eval(d),
+                            || trial_ratio(&c, shapes, motions),
+                            // Only bonds need the length: looked up (a load from the edge
+                            // block's shape, often a cache miss) only for them.
+                            || contact_length(&c, shapes),
+                        )
+                    };
+                    let count = flips.get(i).copied().unwrap_or(0);
+                    let n = end_cycle(&c, decide_at(trial), count, || {
+                        decide_at(Trial { d: 0.0, ..trial })
+                    });
+                    if n.state != c.state
+                        && let Some(f) = flips.get_mut(i)
+                    {
+                        *f = f.saturating_add(1);
+                    }
+                    if n.state != c.state || n.slide_dir != c.slide_dir {
+                        flipped.push(k as u32);
+                    }
+                    *slot = n;
                 }
-                let key = c.key;
-                let trial = Trial {
-                    d: rows[k].eval(d),
-                    // The force below which a change is negligible (see the module
-                    // docs).
-                    band: DECISION_BAND
-                        * scale[key.vertex_block as usize].min(scale[key.edge_block as usize]),
-                };
-                let joint = joint_of(model, material, &c);
-                let decide_at = |trial: Trial| {
-                    decide(
-                        &c,
-                        &joint,
-                        &law,
-                        trial,
-                        |anchor| sheared.row(k, anchor, &c, shapes, half).eval(d),
-                        || trial_ratio(&c, shapes, motions),
-                        // Only bonds need the length: looked up (a load from the edge
-                        // block's shape, often a cache miss) only for them.
-                        || contact_length(&c, shapes),
-                    )
-                };
-                let count = flips.get(i).copied().unwrap_or(0);
-                let n = end_cycle(&c, decide_at(trial), count, || {
-                    decide_at(Trial { d: 0.0, ..trial })
-                });
-                if n.state != c.state
-                    && let Some(f) = flips.get_mut(i)
-                {
-                    *f = f.saturating_add(1);
-                }
-                if n.state != c.state || n.slide_dir != c.slide_dir {
-                    flipped.push(k as u32);
-                }
-                *slot = n;
-            }
-            flipped
-        };
+            };
         let contacts = &mut self.state.contacts.contacts;
         // The flip counts are kept in the open-close iteration only (not the predictor).
         let flips: &mut [u8] = if sc.flips.len() == contacts.len() {
@@ -298,19 +297,20 @@ impl Simulation {
         } else {
             &mut []
         };
-        let flipped = &mut sc.flipped;
+        let (flipped, second) = (&mut sc.flipped, &mut sc.flipped_second);
         flipped.clear();
         #[cfg(feature = "rayon")]
         if (self.options.parallel || sc.system.threads) && contacts.len() >= PARALLEL_MIN_CONTACTS {
             let mid = contacts.len() / 2;
             let (c0, c1) = contacts.split_at_mut(mid);
             let (f0, f1) = flips.split_at_mut(mid.min(flips.len()));
-            let (a, b) = rayon::join(|| run(0, c0, f0), || run(mid, c1, f1));
-            flipped.extend(a);
-            flipped.extend(b);
+            second.clear();
+            rayon::join(|| run(0, c0, f0, flipped), || run(mid, c1, f1, second));
+            flipped.extend_from_slice(second);
             return flipped.len();
         }
-        flipped.extend(run(0, contacts, flips));
+        let _ = second;
+        run(0, contacts, flips, flipped);
         flipped.len()
     }
 }

@@ -118,6 +118,9 @@ pub(crate) struct Scratch {
     pub(crate) iteration_ready: bool,
     /// Contacts whose state changed in the last OCI iteration (for a diagnosis).
     pub(crate) flipped: Vec<u32>,
+    /// Those of the second half of a contact list decided in two halves
+    /// (`Simulation::update_states`), before they join `flipped`.
+    pub(crate) flipped_second: Vec<u32>,
     /// Changes of state of each contact in this attempt's open-close iteration.
     pub(crate) flips: Vec<u8>,
     /// Each block's force scale for the contact law's decisions: the magnitude of the
@@ -309,6 +312,7 @@ impl Simulation {
                 reach: 0.0,
                 iteration_ready: false,
                 flipped: Vec::new(),
+                flipped_second: Vec::new(),
                 flips: Vec::new(),
                 force_scale: Vec::new(),
                 diagnosis: None,
