@@ -252,7 +252,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode, Failure> {
         job.write_history(HISTORY_HEADER)?;
         job.write_frame(job.sim.model().params.frames > 0)?;
         job.announce("scene");
-        job.drive()
+        dda_core::on_pool(|| job.drive())
     })
 }
 
@@ -345,7 +345,7 @@ fn resume_staged(args: ResumeArgs, work: &Path, out: &Path) -> Result<ExitCode, 
     job.finish(|job| {
         job.open_tables(false)?;
         job.announce("resuming");
-        job.drive()
+        dda_core::on_pool(|| job.drive())
     })
 }
 

@@ -122,16 +122,18 @@ pub fn run(o: &Options) -> Result<(), String> {
             count,
             sim.unknowns()
         );
-        let result = sim.run(|s, _| {
-            if s.totals().steps % 20 == 0 {
-                eprintln!(
-                    "  t = {:.4} s, {} steps, dt {:.2e} s, {} cuts",
-                    s.time(),
-                    s.totals().steps,
-                    s.time_step(),
-                    s.totals().cuts
-                );
-            }
+        let result = dda_core::on_pool(|| {
+            sim.run(|s, _| {
+                if s.totals().steps % 20 == 0 {
+                    eprintln!(
+                        "  t = {:.4} s, {} steps, dt {:.2e} s, {} cuts",
+                        s.time(),
+                        s.totals().steps,
+                        s.time_step(),
+                        s.totals().cuts
+                    );
+                }
+            })
         });
         let t = sim.totals();
         rows.push(Row {

@@ -46,7 +46,7 @@ pub use self::guard::{ENERGY_TOLERANCE, EnergyBalance, Violation};
 pub use self::locate::LineIndex;
 pub use self::scene::{Format, Invalid, Model, Scene, SceneError};
 pub use self::settle::Settling;
-pub use self::simulation::{RunOptions, Simulation};
+pub use self::simulation::{RunOptions, Simulation, on_pool};
 pub use self::solver::{BlockSystem, RankOne, SolveError, SolverCounters};
 pub use self::state::{BlockState, RunState, Snapshot, StepRecord, Totals};
 pub use self::summary::{BlockSummary, BoltSummary, Broken, Removed, Seconds, Summary};

@@ -143,6 +143,22 @@ impl std::fmt::Debug for Simulation {
     }
 }
 
+/// Runs `work` (a run's stepping) on a thread of a pool of the machine's threads. The
+/// work a step splits in two halves (`rayon::join`: the iterative solve's passes, the
+/// contact law's) then runs one half on that thread and hands the other to the pool's
+/// next; called from outside any pool, each split is handed over whole and waited for,
+/// at a system call each. Measured on the 10,131-block column's first 30 steps (three
+/// alternating runs): 0.383-0.387 ms a CG iteration against 0.450-0.455 ms, the same
+/// bits. Where no pool can be made (or without the `rayon` feature) `work` runs here;
+/// the results are the same bits either way (`tests/physics/resume.rs`).
+pub fn on_pool<R: Send>(work: impl FnOnce() -> R + Send) -> R {
+    #[cfg(feature = "rayon")]
+    if let Ok(pool) = rayon::ThreadPoolBuilder::new().build() {
+        return pool.install(work);
+    }
+    work()
+}
+
 /// Options of a run that are not part of the scene.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RunOptions {
