@@ -161,7 +161,7 @@ impl Simulation {
             (*k, *f, *mass) = block_terms(model, eff, rule, &blocks[i as usize], i as usize, dt);
         };
         #[cfg(feature = "rayon")]
-        if self.options.parallel && n >= PARALLEL_MIN_BLOCKS {
+        if self.threads() && n >= PARALLEL_MIN_BLOCKS {
             use rayon::prelude::*;
             self.scratch
                 .base_k

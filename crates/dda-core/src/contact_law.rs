@@ -230,9 +230,8 @@ impl Simulation {
 
     /// Re-checks every active contact against the trial solution; returns how many
     /// changed state. Each contact's decision reads the trial alone, so with many
-    /// contacts, where the system is solved on two threads (iteratively) or
-    /// `RunOptions::parallel` is on, the two halves of the list are decided on two
-    /// threads: the same decisions, listed in the same order.
+    /// contacts, on the pool ([`Simulation::threads`]), the two halves of the list are
+    /// decided on two threads: the same decisions, listed in the same order.
     pub(crate) fn update_states(&mut self) -> usize {
         let p = &self.model.params;
         let law = Law {
@@ -240,6 +239,7 @@ impl Simulation {
             shear_penalty: p.shear_penalty,
             open_band: self.open_band(),
         };
+        let threads = self.threads();
         let (model, material, sc) = (&self.model, &self.material, &mut self.scratch);
         let (rows, shapes, half, d) = (&sc.rows, &sc.shapes, &sc.half, &sc.d);
         let (sheared, scale, motions) = (&sc.sheared, &sc.force_scale, &sc.motions);
@@ -300,7 +300,7 @@ impl Simulation {
         let (flipped, second) = (&mut sc.flipped, &mut sc.flipped_second);
         flipped.clear();
         #[cfg(feature = "rayon")]
-        if (self.options.parallel || sc.system.threads) && contacts.len() >= PARALLEL_MIN_CONTACTS {
+        if threads && contacts.len() >= PARALLEL_MIN_CONTACTS {
             let mid = contacts.len() / 2;
             let (c0, c1) = contacts.split_at_mut(mid);
             let (f0, f1) = flips.split_at_mut(mid.min(flips.len()));
@@ -316,9 +316,9 @@ impl Simulation {
 }
 
 /// Fewest contacts for which the contact law decides the open-close iteration's states
-/// on two threads, in two halves of the contact list (where the system is solved
-/// iteratively or [`crate::RunOptions::parallel`] is on): below it, waking the pool
-/// costs more than it saves. Our choice, about the contacts of
+/// on two threads, in two halves of the contact list (where a step's work goes to the
+/// pool: [`crate::RunOptions::parallel`], or a system solved iteratively): below it,
+/// waking the pool costs more than it saves. Our choice, about the contacts of
 /// 4,000 blocks; on the 28,325-block column's first 15 steps the assembly phase (where
 /// the decisions are counted) took 1.65-1.73 s against 1.84-1.94 s on one thread, three
 /// alternating runs.

@@ -48,7 +48,7 @@ impl Simulation {
             &self.scratch.pairs,
             &self.detection,
             &self.scratch.prev,
-            self.options.parallel,
+            self.threads(),
             &mut self.state.contacts,
         );
         let first = self.state.totals.steps == 0;
