@@ -66,14 +66,21 @@ impl Simulation {
                     }
                 }
                 inertia.push(m);
-                let v = self.state.blocks[i as usize].velocity;
-                let start: [f64; 6] = std::array::from_fn(|k| v[k] * dt);
+                let start: [f64; 6] = if self.warm_start && self.scratch.solved_dt > 0.0 {
+                    // Motion from rest grows as dt^2.
+                    let grow = (dt / self.scratch.solved_dt).powi(2);
+                    std::array::from_fn(|k| self.scratch.d[i as usize][k] * grow)
+                } else {
+                    let v = self.state.blocks[i as usize].velocity;
+                    std::array::from_fn(|k| v[k] * dt)
+                };
                 self.scratch.system.set_start(f as u32, &start);
             }
             self.scratch.reach = reach;
             self.scratch.system.set_inertia(&inertia);
         }
         let tol = ITERATIVE_TOLERANCE * self.model.params.d_tol;
+        self.scratch.solved_dt = self.scratch.attempt_dt;
         self.scratch
             .system
             .solve_iterative(self.scratch.reach, tol, MAX_CG_ITERATIONS)
