@@ -222,6 +222,8 @@ fn the_contact_law_decides_alike_in_halves() {
     let blocks = column.scaled_blocks((4_000.0 / column.blocks as f64).sqrt());
     let mut analysis = column.analysis();
     analysis.frames = 0;
+    // The direct solve, so that only `parallel` sends the halves to two threads.
+    analysis.solver = Some(dda_core::scene::SolverChoice::Direct);
     let model = dda_bench::column_scene("column", &blocks, analysis)
         .validate()
         .unwrap();

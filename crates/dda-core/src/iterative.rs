@@ -14,11 +14,12 @@ use crate::simulation::Simulation;
 use crate::solver::{Iterated, chol, forward_solve};
 
 /// Free blocks from which `solver = "auto"` solves iteratively. Measured on the paper's
-/// two-set column scaled up (docs/scaling.md, 0.1 s each, whole runs): iterative over
-/// direct 9.3 s against 7.6 s at 3,472 blocks, 31.5 against 39.9 s at 10,131, 45.3
-/// against 63.2 s at 13,889 and 113 against 208 s at 28,325 (and 18.8 against 5.0 s at
-/// 826 blocks, 1 s); the ratio crosses 1 near 5,600 blocks.
-pub const ITERATIVE_FROM_BLOCKS: usize = 6_000;
+/// two-set column scaled up (docs/scaling.md, 0.1 s each, whole runs, two alternating
+/// runs each, 2026-11-25 after the iterative solve stepped inside a thread pool):
+/// iterative over direct 2.97-3.10 s against 2.23-2.39 s at 1,884 blocks, 6.18-6.19 s
+/// against 6.57-7.24 s at 3,472; the ratio crosses 1 near 3,000 blocks (it had crossed
+/// near 5,600 before, when this was 6,000).
+pub const ITERATIVE_FROM_BLOCKS: usize = 3_000;
 
 /// The largest error of a vertex's motion an iterative solve leaves, as a fraction of
 /// d_tol. Our choice: a gap error of 1e-8 d_tol, times a normal penalty, is a force some
