@@ -297,19 +297,19 @@ impl Simulation {
         } else {
             &mut []
         };
-        let (flipped, second) = (&mut sc.flipped, &mut sc.flipped_second);
+        let flipped = &mut sc.flipped;
         flipped.clear();
         #[cfg(feature = "rayon")]
         if threads && contacts.len() >= PARALLEL_MIN_CONTACTS {
             let mid = contacts.len() / 2;
             let (c0, c1) = contacts.split_at_mut(mid);
             let (f0, f1) = flips.split_at_mut(mid.min(flips.len()));
+            let second = &mut sc.flipped_second;
             second.clear();
             rayon::join(|| run(0, c0, f0, flipped), || run(mid, c1, f1, second));
             flipped.extend_from_slice(second);
             return flipped.len();
         }
-        let _ = second;
         run(0, contacts, flips, flipped);
         flipped.len()
     }

@@ -44,8 +44,9 @@ pub fn solves_iteratively(choice: SolverChoice, n_free: usize) -> bool {
 
 impl Simulation {
     /// Solves the assembled system iteratively. At the attempt's first solve the start
-    /// is each block's velocity times dt and the stop's data are made: each block's
-    /// inertia term (c / dt^2 M, with c = 2 under Shi's rule and 4 under the average
+    /// is each block's velocity times dt (with `warm_start`, the settling's, the last
+    /// solved motion scaled to dt) and the stop's data are made: each block's inertia
+    /// term (c / dt^2 M, with c = 2 under Shi's rule and 4 under the average
     /// acceleration) and the largest reach of a vertex (see `solver::iterative`). Later
     /// solves of the attempt start from the last solution.
     pub(crate) fn solve_iteratively(&mut self) -> Iterated {

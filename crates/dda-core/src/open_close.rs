@@ -141,11 +141,7 @@ impl Simulation {
                     system.add_rank_one(t);
                 }
                 for t in &self.scratch.rhs_changes {
-                    for (b, c) in t.blocks.iter().zip(&t.c) {
-                        if let Some(b) = *b {
-                            system.add_rhs(b, t.s, c);
-                        }
-                    }
+                    system.add_rhs_term(t);
                 }
                 watch.lap(rec, Phase::Assembly);
                 let solved = self.solve_iteratively();

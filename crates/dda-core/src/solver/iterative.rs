@@ -342,11 +342,7 @@ fn descend(
     for (ri, qi) in r.iter_mut().zip(q) {
         *ri -= alpha * qi;
     }
-    match nd {
-        6 => apply_blocks::<6>(diag, r, z),
-        3 => apply_blocks::<3>(diag, r, z),
-        nd => unreachable!("blocks of {nd} unknowns"),
-    }
+    apply_nd(diag, nd, r, z)
 }
 
 /// Block `b` of `ND` values of `v`, as an array.
@@ -410,20 +406,27 @@ fn apply_blocks<const ND: usize>(a: &[Packed], r: &[f64], z: &mut [f64]) -> f64 
     sum
 }
 
-/// [`apply_blocks`] for blocks of `nd` unknowns, in two halves of the blocks (on two
-/// threads when `threads` is set) whose sums are added in a fixed order: the same result
-/// either way.
+/// [`apply_blocks`] for blocks of `nd` unknowns.
+fn apply_nd(a: &[Packed], nd: usize, r: &[f64], z: &mut [f64]) -> f64 {
+    match nd {
+        6 => apply_blocks::<6>(a, r, z),
+        3 => apply_blocks::<3>(a, r, z),
+        nd => unreachable!("blocks of {nd} unknowns"),
+    }
+}
+
+/// [`apply_nd`] in two halves of the blocks (on two threads when `threads` is set) whose
+/// sums are added in a fixed order: the same result either way.
 fn apply(a: &[Packed], nd: usize, r: &[f64], z: &mut [f64], threads: bool) -> f64 {
     let half = a.len() / 2;
     let (a0, a1) = a.split_at(half);
     let (r0, r1) = r.split_at(half * nd);
     let (z0, z1) = z.split_at_mut(half * nd);
-    let one = |a: &[Packed], r: &[f64], z: &mut [f64]| match nd {
-        6 => apply_blocks::<6>(a, r, z),
-        3 => apply_blocks::<3>(a, r, z),
-        nd => unreachable!("blocks of {nd} unknowns"),
-    };
-    let (s0, s1) = both(threads, || one(a0, r0, z0), || one(a1, r1, z1));
+    let (s0, s1) = both(
+        threads,
+        || apply_nd(a0, nd, r0, z0),
+        || apply_nd(a1, nd, r1, z1),
+    );
     s0 + s1
 }
 

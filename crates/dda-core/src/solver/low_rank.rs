@@ -217,6 +217,17 @@ impl BlockSystem {
             self.add_outer(e, a, b, t.s, &t.c[0], &t.c[1]);
         }
     }
+
+    /// Adds the right-hand side term `t` (s times its blocks' rows) to the right-hand
+    /// side: a change of a spring's or a friction force's term, for a system solved
+    /// iteratively.
+    pub fn add_rhs_term(&mut self, t: &RankOne) {
+        for (b, c) in t.blocks.iter().zip(&t.c) {
+            if let Some(b) = *b {
+                self.add_rhs(b, t.s, c);
+            }
+        }
+    }
 }
 
 /// Solves the dense `k x k` system `a x = b` (row-major `a`, overwritten) by LU with
