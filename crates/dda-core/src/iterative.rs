@@ -44,9 +44,8 @@ pub fn solves_iteratively(choice: SolverChoice, n_free: usize) -> bool {
 
 impl Simulation {
     /// Solves the assembled system iteratively. At the attempt's first solve the start
-    /// is each block's velocity times dt (with `warm_start`, the settling's, the last
-    /// solved motion scaled to dt) and the stop's data are made: each block's inertia
-    /// term (c / dt^2 M, with c = 2 under Shi's rule and 4 under the average
+    /// is each block's velocity times dt and the stop's data are made: each block's
+    /// inertia term (c / dt^2 M, with c = 2 under Shi's rule and 4 under the average
     /// acceleration) and the largest reach of a vertex (see `solver::iterative`). Later
     /// solves of the attempt start from the last solution.
     pub(crate) fn solve_iteratively(&mut self) -> Iterated {
@@ -68,21 +67,14 @@ impl Simulation {
                     }
                 }
                 inertia.push(m);
-                let start: [f64; 6] = if self.warm_start && self.scratch.solved_dt > 0.0 {
-                    // Motion from rest grows as dt^2.
-                    let grow = (dt / self.scratch.solved_dt).powi(2);
-                    std::array::from_fn(|k| self.scratch.d[i as usize][k] * grow)
-                } else {
-                    let v = self.state.blocks[i as usize].velocity;
-                    std::array::from_fn(|k| v[k] * dt)
-                };
+                let v = self.state.blocks[i as usize].velocity;
+                let start: [f64; 6] = std::array::from_fn(|k| v[k] * dt);
                 self.scratch.system.set_start(f as u32, &start);
             }
             self.scratch.reach = reach;
             self.scratch.system.set_inertia(&inertia);
         }
         let tol = ITERATIVE_TOLERANCE * self.model.params.d_tol;
-        self.scratch.solved_dt = self.scratch.attempt_dt;
         self.scratch
             .system
             .solve_iterative(self.scratch.reach, tol, MAX_CG_ITERATIONS)

@@ -218,9 +218,6 @@ impl Simulation {
         // where each open-close iteration would otherwise close one more layer of a
         // stack (the layers above falling with it) and a tall stack runs out of them.
         settling.close_touching = true;
-        // Its static steps move as the step before once they settle: an iterative
-        // solve starts from that motion (no checkpoint is taken inside the settling).
-        settling.warm_start = true;
         let supplied = settling.state.energy.supplied;
         let mut round = settling.relax(SETTLE_MAX_STEPS, None, None)?;
         let mut report = Settling {

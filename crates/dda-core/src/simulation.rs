@@ -60,12 +60,6 @@ pub struct Simulation {
     /// vertex within the open band of its edge's line, `Simulation::open_band`): set
     /// for the settling's copy of the model (`settle`).
     pub(crate) close_touching: bool,
-    /// Whether a system solved iteratively starts each attempt from the last solved
-    /// motion, scaled to the attempt's dt (static steps from rest move as the step
-    /// before while they settle), rather than from the velocities (zero in a static
-    /// step): set for the settling's copy of the model, whose steps no checkpoint
-    /// saves (the start of a run's own steps comes from its state alone, for resume).
-    pub(crate) warm_start: bool,
     /// What this process's settling did (see `settle`).
     pub(crate) settling: Option<Settling>,
     /// The state at the end of the last step: what a checkpoint saves.
@@ -117,8 +111,6 @@ pub(crate) struct Scratch {
     pub(crate) motions: Vec<Motion>,
     /// The step size of the attempt under way.
     pub(crate) attempt_dt: f64,
-    /// The step size of the motion in `d` (the last solve's; 0 before any).
-    pub(crate) solved_dt: f64,
     /// The iterative solve's largest reach of a vertex in the attempt
     /// (`crate::iterative`).
     pub(crate) reach: f64,
@@ -297,7 +289,6 @@ impl Simulation {
             n_free: n_free as usize,
             energy_floor,
             close_touching: false,
-            warm_start: false,
             settling: None,
             state: RunState {
                 t: 0.0,
@@ -345,7 +336,6 @@ impl Simulation {
                 d: vec![[0.0; 6]; n],
                 motions: Vec::with_capacity(n),
                 attempt_dt: dt0,
-                solved_dt: 0.0,
                 reach: 0.0,
                 iteration_ready: false,
                 flipped: Vec::new(),
