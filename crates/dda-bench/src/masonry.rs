@@ -30,7 +30,10 @@ pub enum Layout {
 }
 
 /// A structure on a fixed base, with the parameters of the open-close issue's walls:
-/// density 2600, E 1 GPa, nu 0.25, dt 1 ms, d_max 0.01 m, d_tol 0.02 m, p 1e10.
+/// density 2600, E 1 GPa, nu 0.25, dt 1 ms, d_max 0.01 m, d_tol 0.02 m, p 1e10. Its
+/// scenes settle before the run, as a user's scene does (`analysis.settle` unset,
+/// docs/method.md section 13); the built-in walls and grid, run beside ntdda, which
+/// starts unloaded, state `settle = false`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Masonry {
     /// How the blocks are laid.
@@ -157,7 +160,7 @@ impl Masonry {
                 frames: 2,
                 impact_steps: None,
                 integration: None,
-                settle: Some(false),
+                settle: None,
                 solver: None,
             },
             materials: rock(2600.0, 1e9, 0.25),
