@@ -613,9 +613,7 @@ impl Job {
     /// checkpoint and leaves the run in its staging folder for `dda resume`; otherwise
     /// writes the summary and the report and moves the outputs into place.
     fn drive(&mut self) -> Result<ExitCode, Failure> {
-        // The settling takes static steps before t = 0 inside the first step: say so,
-        // and afterwards what it took, so that a large model's wait is explained.
-        let mut settling = self.sim.settles().then(std::time::Instant::now);
+        let settling = self.sim.settles().then(std::time::Instant::now);
         if settling.is_some() && !self.quiet {
             eprintln!("settling: static steps onto the contacts before t = 0 (analysis.settle)");
         }
@@ -639,7 +637,58 @@ impl Job {
         // --max-steps counts this process's steps (a resumed run's from where it resumed).
         let first = self.sim.totals().steps;
         let mut end = End::Done;
-        while !self.sim.finished() {
+        // The settling's static steps before t = 0: their progress shown as the run's
+        // is, a signal heeded between them (the blocks then left unsettled, to settle
+        // again on resume), and what they took said afterwards.
+        if let Some(began) = settling {
+            let signals = &self.signals;
+            let mut caught = None;
+            let outcome = self.sim.settle_watched(|p| {
+                caught = signals.caught();
+                if let Some(bar) = &bar {
+                    bar.set_message(format!("0 (settling: {} static steps)", p.steps));
+                    bar.tick();
+                }
+                if let Some(last) = logged.as_mut()
+                    && last.elapsed() >= PROGRESS_EVERY
+                {
+                    *last = std::time::Instant::now();
+                    eprintln!(
+                        "settling: {} static steps, the motion changing by {:.1e} of the first \
+                         step's (settled at 1e-5); {:.0} s of wall time",
+                        p.steps,
+                        p.change,
+                        began.elapsed().as_secs_f64()
+                    );
+                }
+                caught.is_none()
+            });
+            match outcome {
+                Ok(true) => {
+                    if let Some(done) = self.sim.settling()
+                        && !self.quiet
+                    {
+                        let line = format!(
+                            "settled in {} static steps{} ({:.3} s)",
+                            done.steps,
+                            if done.converged {
+                                ""
+                            } else {
+                                ", stopped without converging"
+                            },
+                            began.elapsed().as_secs_f64()
+                        );
+                        match &bar {
+                            Some(bar) => bar.println(line),
+                            None => eprintln!("{line}"),
+                        }
+                    }
+                }
+                Ok(false) => end = End::Signal(caught.unwrap_or(2)),
+                Err(e) => end = End::Failed(e.to_string()),
+            }
+        }
+        while matches!(end, End::Done) && !self.sim.finished() {
             if let Some(sig) = self.signals.caught() {
                 end = End::Signal(sig);
                 break;
@@ -655,25 +704,6 @@ impl Job {
             }
             match self.sim.step() {
                 Ok(rec) => {
-                    if let Some(started) = settling.take()
-                        && let Some(done) = self.sim.settling()
-                        && !self.quiet
-                    {
-                        let line = format!(
-                            "settled in {} static steps{} ({:.3} s with the first step)",
-                            done.steps,
-                            if done.converged {
-                                ""
-                            } else {
-                                ", stopped without converging"
-                            },
-                            started.elapsed().as_secs_f64()
-                        );
-                        match &bar {
-                            Some(bar) => bar.println(line),
-                            None => eprintln!("{line}"),
-                        }
-                    }
                     self.write_history(&history_row(&rec))?;
                     self.write_tables()?;
                     self.sample_frames()?;

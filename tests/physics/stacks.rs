@@ -457,3 +457,45 @@ fn columns_slide_below_their_toppling_limit_and_topple_above_it() {
         }
     }
 }
+
+/// The settling can be watched and stopped (`Simulation::settle_watched`, as `dda run`
+/// does to show its progress and heed a signal): it reports every static step in turn,
+/// a watcher returning false stops it with the blocks as the scene gave them and the
+/// settling still to do, and settling again from there ends in the same state, bit for
+/// bit, as settling at once (a run interrupted while it settles resumes as it would have
+/// gone on).
+#[test]
+fn a_settling_stopped_and_taken_again_ends_as_one_taken_at_once() {
+    let (text, _) = stack(6, 1, false, 35.0, 20.0, "");
+    let model = || Scene::parse(&text, Format::Toml, "stack.toml").unwrap().1;
+    let polygons = |sim: &Simulation| -> Vec<Vec<DVec2>> {
+        sim.blocks()
+            .iter()
+            .map(|b| b.polygon.vertices().to_vec())
+            .collect()
+    };
+    let mut once = Simulation::new(model(), RunOptions::default());
+    let mut seen = Vec::new();
+    assert!(
+        once.settle_watched(|p| {
+            seen.push(p.steps);
+            true
+        })
+        .unwrap()
+    );
+    let steps = once.settling().unwrap().steps;
+    assert!(steps > 5, "settled in {steps} steps");
+    assert_eq!(seen, (1..=steps).collect::<Vec<_>>());
+
+    let mut stopped = Simulation::new(model(), RunOptions::default());
+    let start = polygons(&stopped);
+    assert!(!stopped.settle_watched(|p| p.steps < 5).unwrap());
+    assert_eq!(polygons(&stopped), start, "the blocks moved");
+    assert!(stopped.settling().is_none());
+    assert!(stopped.settle_watched(|_| true).unwrap());
+    assert_eq!(stopped.settling(), once.settling());
+    assert_eq!(polygons(&stopped), polygons(&once));
+    let (a, b) = (once.step().unwrap(), stopped.step().unwrap());
+    assert_eq!(a.dt, b.dt);
+    assert_eq!(polygons(&stopped), polygons(&once));
+}

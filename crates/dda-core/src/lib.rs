@@ -45,7 +45,7 @@ pub use self::effects::Effects;
 pub use self::guard::{ENERGY_TOLERANCE, EnergyBalance, Violation};
 pub use self::locate::LineIndex;
 pub use self::scene::{Format, Invalid, Model, Scene, SceneError};
-pub use self::settle::Settling;
+pub use self::settle::{SettleProgress, Settling};
 pub use self::simulation::{RunOptions, Simulation, on_pool};
 pub use self::solver::{BlockSystem, RankOne, SolveError, SolverCounters};
 pub use self::state::{BlockState, RunState, Snapshot, StepRecord, Totals};

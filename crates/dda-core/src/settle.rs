@@ -131,6 +131,19 @@ struct Relaxed {
     /// The largest change of a vertex's motion from the step before in the round's last
     /// step, over `scale` (infinite after a first step of its own).
     change: f64,
+    /// Whether the watcher stopped the round.
+    interrupted: bool,
+}
+
+/// How far the settling has come ([`Simulation::settle_watched`]), after a static step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SettleProgress {
+    /// Static steps taken so far.
+    pub steps: u32,
+    /// The largest change of a vertex's motion from the step before, over the largest
+    /// motion of the settling's first step (infinite for a round's first step): the
+    /// settling has converged at 1e-5.
+    pub change: f64,
 }
 
 /// What the settling did before t = 0 ([`Simulation::settling`]).
@@ -163,13 +176,36 @@ impl Simulation {
         self.settling
     }
 
+    /// Settles the blocks now, if the scene asks for it and it has not been done (the
+    /// first step does it otherwise), calling `watch` after every static step with how
+    /// far the settling has come. `watch` returning false stops it, the blocks left as
+    /// they were, to settle again at the next call or step (a run interrupted while it
+    /// settles): `Ok(false)`. `Ok(true)` once settled, or with nothing to settle. On an
+    /// error [`Simulation::diagnosis`] says what happened.
+    pub fn settle_watched(
+        &mut self,
+        mut watch: impl FnMut(&SettleProgress) -> bool,
+    ) -> Result<bool, SimError> {
+        if self.state.settled {
+            return Ok(true);
+        }
+        let settled = self.settle(&mut watch);
+        match &settled {
+            Ok(false) => self.state.settled = false,
+            Err(e) => self.diagnose(e, self.state.dt, None),
+            Ok(true) => {}
+        }
+        settled
+    }
+
     /// Settles the blocks at t = 0 (see the module docs), once, before the first step
-    /// of a dynamic run whose scene asks for it and has something to settle.
-    pub(crate) fn settle(&mut self) -> Result<(), SimError> {
+    /// of a dynamic run whose scene asks for it and has something to settle; false if
+    /// `watch` stopped it (the blocks left as they were).
+    fn settle(&mut self, watch: &mut dyn FnMut(&SettleProgress) -> bool) -> Result<bool, SimError> {
         let settles = self.settles();
         self.state.settled = true;
         if !settles {
-            return Ok(());
+            return Ok(true);
         }
         let p = &self.model.params;
         let mut model = self.model.clone();
@@ -195,7 +231,7 @@ impl Simulation {
             }
         }
         if heaviest == 0.0 {
-            return Ok(());
+            return Ok(true);
         }
         let mp = &mut model.params;
         mp.mode = Mode::Static;
@@ -221,7 +257,10 @@ impl Simulation {
         // stack (the layers above falling with it) and a tall stack runs out of them.
         settling.close_touching = true;
         let supplied = settling.state.energy.supplied;
-        let mut round = settling.relax(SETTLE_MAX_STEPS, None, None)?;
+        let mut round = settling.relax(SETTLE_MAX_STEPS, None, None, 0, watch)?;
+        if round.interrupted {
+            return Ok(false);
+        }
         let mut report = Settling {
             steps: round.steps,
             converged: round.converged,
@@ -239,7 +278,10 @@ impl Simulation {
                 break;
             }
             let budget = report.steps.min(SETTLE_MAX_STEPS - report.steps);
-            let next = settling.relax(budget, Some(round.scale), None)?;
+            let next = settling.relax(budget, Some(round.scale), None, report.steps, watch)?;
+            if next.interrupted {
+                return Ok(false);
+            }
             report.steps += next.steps;
             if !next.converged {
                 (settling.state, moved) = settled;
@@ -256,7 +298,11 @@ impl Simulation {
         if round.converged {
             let settled = settling.state.clone();
             if settling.rewind(&round, &mut moved, report.steps) {
-                let check = settling.relax(1, Some(round.scale), Some(&round.last))?;
+                let check =
+                    settling.relax(1, Some(round.scale), Some(&round.last), report.steps, watch)?;
+                if check.interrupted {
+                    return Ok(false);
+                }
                 report.steps += check.steps;
                 // False for a step not taken (infinite) or of no motion (NaN).
                 let confirmed = check.change <= SETTLE_CHECK;
@@ -311,17 +357,20 @@ impl Simulation {
             .energy
             .supplied_max
             .max(self.state.energy.supplied);
-        Ok(())
+        Ok(true)
     }
 
     /// One round of settling: static steps until the motion converges (see the module
     /// docs), for at most `budget` steps; `scale`, the largest motion of the settling's
-    /// first step (over dt^2 / 2), once known.
+    /// first step (over dt^2 / 2), once known. `watch` is told of every step (`done`
+    /// steps came before the round), and stops the round by returning false.
     fn relax(
         &mut self,
         budget: u32,
         scale: Option<f64>,
         before: Option<&[DVec2]>,
+        done: u32,
+        watch: &mut dyn FnMut(&SettleProgress) -> bool,
     ) -> Result<Relaxed, SimError> {
         // Each step's motion of every free vertex over dt^2 / 2 (its acceleration from
         // rest, the same over steps of any size while a block slides steadily, so that
@@ -338,6 +387,7 @@ impl Simulation {
             steady: vec![DVec2::ZERO; self.state.blocks.len()],
             last: Vec::new(),
             change: f64::INFINITY,
+            interrupted: false,
         };
         for n in 1..=budget {
             if self.finished() {
@@ -376,6 +426,14 @@ impl Simulation {
                 }
             }
             report.change = change / scale;
+            let progress = SettleProgress {
+                steps: done + n,
+                change: report.change,
+            };
+            if !watch(&progress) {
+                report.interrupted = true;
+                break;
+            }
             if change <= SETTLE_TOLERANCE * scale {
                 report.last = motion;
                 report.converged = true;

@@ -507,12 +507,7 @@ impl Simulation {
     pub fn step(&mut self) -> Result<StepRecord, SimError> {
         let mut last_dt = self.state.dt;
         let mut worst = None;
-        if !self.state.settled
-            && let Err(e) = self.settle()
-        {
-            self.diagnose(&e, last_dt, None);
-            return Err(e);
-        }
+        self.settle_watched(|_| true)?;
         let result = self.try_step(&mut last_dt, &mut worst);
         match &result {
             Err(e) => self.diagnose(e, last_dt, worst),
