@@ -621,7 +621,7 @@ impl Job {
             let bar = ProgressBar::new(1000);
             bar.set_style(
                 ProgressStyle::with_template(
-                    "{elapsed_precise} [{bar:40}] t = {msg} s  ({per_sec}, eta {eta})",
+                    "{elapsed_precise} [{bar:40}] {msg}  ({per_sec}, eta {eta})",
                 )
                 .unwrap_or_else(|_| ProgressStyle::default_bar())
                 .progress_chars("=> "),
@@ -646,7 +646,7 @@ impl Job {
             let outcome = self.sim.settle_watched(|p| {
                 caught = signals.caught();
                 if let Some(bar) = &bar {
-                    bar.set_message(format!("0 (settling: {} static steps)", p.steps));
+                    bar.set_message(format!("settling: {} static steps", p.steps));
                     bar.tick();
                 }
                 if let Some(last) = logged.as_mut()
@@ -713,7 +713,7 @@ impl Job {
                     }
                     if let Some(bar) = &bar {
                         bar.set_position((1000.0 * self.sim.time() / duration) as u64);
-                        bar.set_message(format!("{:.4}", self.sim.time()));
+                        bar.set_message(format!("t = {:.4} s", self.sim.time()));
                     }
                     if let Some(last) = logged.as_mut()
                         && last.elapsed() >= PROGRESS_EVERY
