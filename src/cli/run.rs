@@ -653,11 +653,19 @@ impl Job {
                     && last.elapsed() >= PROGRESS_EVERY
                 {
                     *last = std::time::Instant::now();
+                    // A round's first step has no step before it to compare with.
+                    let change = if p.change.is_finite() {
+                        format!(
+                            "the motion changing by {:.1e} of the first step's",
+                            p.change
+                        )
+                    } else {
+                        "a new round".to_string()
+                    };
                     eprintln!(
-                        "settling: {} static steps, the motion changing by {:.1e} of the first \
-                         step's (settled at 1e-5); {:.0} s of wall time",
+                        "settling: {} static steps, {change} (settled at 1e-5); {:.0} s of \
+                         wall time",
                         p.steps,
-                        p.change,
                         began.elapsed().as_secs_f64()
                     );
                 }
