@@ -609,6 +609,75 @@ impl Job {
             .map_err(|e| Failure::Output(format!("cannot write the checkpoint: {e}")))
     }
 
+    /// Settles the blocks before t = 0 (`Simulation::settle_watched`), their progress
+    /// shown as the run's is (`bar`, or a line every `PROGRESS_EVERY` since `logged`), a
+    /// signal heeded between the static steps (the blocks then left unsettled, to settle
+    /// again on resume), and what they took said afterwards; `began` is when the
+    /// settling began, for the wall time shown. Returns how the run goes on:
+    /// `End::Done` to step.
+    fn settle_first(
+        &mut self,
+        began: std::time::Instant,
+        bar: Option<&ProgressBar>,
+        logged: &mut Option<std::time::Instant>,
+    ) -> End {
+        let signals = &self.signals;
+        let mut caught = None;
+        let outcome = self.sim.settle_watched(|p| {
+            caught = signals.caught();
+            if let Some(bar) = bar {
+                bar.set_message(format!("settling: {} static steps", p.steps));
+                bar.tick();
+            }
+            if let Some(last) = logged.as_mut()
+                && last.elapsed() >= PROGRESS_EVERY
+            {
+                *last = std::time::Instant::now();
+                // A round's first step has no step before it to compare with.
+                let change = if p.change.is_finite() {
+                    format!(
+                        "the motion changing by {:.1e} of the first step's",
+                        p.change
+                    )
+                } else {
+                    "a new round".to_string()
+                };
+                eprintln!(
+                    "settling: {} static steps, {change} (settled at 1e-5); {:.0} s of \
+                     wall time",
+                    p.steps,
+                    began.elapsed().as_secs_f64()
+                );
+            }
+            caught.is_none()
+        });
+        match outcome {
+            Ok(true) => {
+                if let Some(done) = self.sim.settling()
+                    && !self.quiet
+                {
+                    let line = format!(
+                        "settled in {} static steps{} ({:.3} s)",
+                        done.steps,
+                        if done.converged {
+                            ""
+                        } else {
+                            ", stopped without converging"
+                        },
+                        began.elapsed().as_secs_f64()
+                    );
+                    match bar {
+                        Some(bar) => bar.println(line),
+                        None => eprintln!("{line}"),
+                    }
+                }
+                End::Done
+            }
+            Ok(false) => End::Signal(caught.unwrap_or(2)),
+            Err(e) => End::Failed(e.to_string()),
+        }
+    }
+
     /// Steps to the end, a failure, the step limit or a signal. At a signal, saves a
     /// checkpoint and leaves the run in its staging folder for `dda resume`; otherwise
     /// writes the summary and the report and moves the outputs into place.
@@ -637,64 +706,8 @@ impl Job {
         // --max-steps counts this process's steps (a resumed run's from where it resumed).
         let first = self.sim.totals().steps;
         let mut end = End::Done;
-        // The settling's static steps before t = 0: their progress shown as the run's
-        // is, a signal heeded between them (the blocks then left unsettled, to settle
-        // again on resume), and what they took said afterwards.
         if let Some(began) = settling {
-            let signals = &self.signals;
-            let mut caught = None;
-            let outcome = self.sim.settle_watched(|p| {
-                caught = signals.caught();
-                if let Some(bar) = &bar {
-                    bar.set_message(format!("settling: {} static steps", p.steps));
-                    bar.tick();
-                }
-                if let Some(last) = logged.as_mut()
-                    && last.elapsed() >= PROGRESS_EVERY
-                {
-                    *last = std::time::Instant::now();
-                    // A round's first step has no step before it to compare with.
-                    let change = if p.change.is_finite() {
-                        format!(
-                            "the motion changing by {:.1e} of the first step's",
-                            p.change
-                        )
-                    } else {
-                        "a new round".to_string()
-                    };
-                    eprintln!(
-                        "settling: {} static steps, {change} (settled at 1e-5); {:.0} s of \
-                         wall time",
-                        p.steps,
-                        began.elapsed().as_secs_f64()
-                    );
-                }
-                caught.is_none()
-            });
-            match outcome {
-                Ok(true) => {
-                    if let Some(done) = self.sim.settling()
-                        && !self.quiet
-                    {
-                        let line = format!(
-                            "settled in {} static steps{} ({:.3} s)",
-                            done.steps,
-                            if done.converged {
-                                ""
-                            } else {
-                                ", stopped without converging"
-                            },
-                            began.elapsed().as_secs_f64()
-                        );
-                        match &bar {
-                            Some(bar) => bar.println(line),
-                            None => eprintln!("{line}"),
-                        }
-                    }
-                }
-                Ok(false) => end = End::Signal(caught.unwrap_or(2)),
-                Err(e) => end = End::Failed(e.to_string()),
-            }
+            end = self.settle_first(began, bar.as_ref(), &mut logged);
         }
         while matches!(end, End::Done) && !self.sim.finished() {
             if let Some(sig) = self.signals.caught() {
