@@ -839,6 +839,102 @@ fn signals_end_a_run_with_a_checkpoint_that_resumes_bit_for_bit() {
     }
 }
 
+/// A wall of `courses` courses of twenty 1 m x 0.5 m bricks in running bond, soft
+/// against the penalty (E = 1e9 Pa, p = 1e10 N/m), on a fixed base tilted 40 degrees,
+/// friction 30: its settling takes hundreds of static steps (a second or so), and the
+/// run 0.01 s.
+fn settling_wall(courses: usize) -> String {
+    let (s, c) = 40f64.to_radians().sin_cos();
+    let pt = |x: f64, y: f64| format!("[{}, {}]", x * c - y * s, x * s + y * c);
+    let mut t = String::from(
+        "name = \"settling-wall\"\n[analysis]\nduration = 0.01\ntime_step = 0.001\n\
+         max_displacement = 0.002\nnormal_penalty = 1e10\ngravity = [0.0, -9.81]\n\
+         [materials.rock]\ndensity = 2600.0\nyoung = 1e9\npoisson = 0.25\n\
+         [joints.default]\nfriction_deg = 30.0\n",
+    );
+    let block = |t: &mut String, id: String, x0: f64, x1: f64, y0: f64, y1: f64, fixed: bool| {
+        t.push_str(&format!(
+            "[[blocks]]\nid = \"{id}\"\nmaterial = \"rock\"\nvertices = [{}, {}, {}, {}]\n{}",
+            pt(x0, y0),
+            pt(x1, y0),
+            pt(x1, y1),
+            pt(x0, y1),
+            if fixed { "fixed = true\n" } else { "" }
+        ));
+    };
+    block(&mut t, "base".into(), -5.0, 30.0, -1.0, 0.0, true);
+    for r in 0..courses {
+        let (y0, y1) = (0.5 * r as f64, 0.5 * (r + 1) as f64);
+        let mut xs = vec![0.0];
+        let first = if r % 2 == 1 { 0.5 } else { 1.0 };
+        xs.extend((0..20).map(|k| first + k as f64).filter(|&x| x < 20.0));
+        xs.push(20.0);
+        for (k, w) in xs.windows(2).enumerate() {
+            block(&mut t, format!("b{r}-{k}"), w[0], w[1], y0, y1, false);
+        }
+    }
+    t
+}
+
+/// A signal while the blocks settle (before t = 0) ends the settling at its next static
+/// step: exit 130, a checkpoint holding the blocks as the scene gave them (no step
+/// taken, not settled), a line naming `dda resume`; resumed, the run settles again and
+/// ends exactly as the uninterrupted one.
+#[cfg(unix)]
+#[test]
+fn a_signal_while_settling_ends_it_and_the_run_resumes_bit_for_bit() {
+    use std::io::BufRead;
+    let dir = scratch("settle-signal");
+    let scene = dir.join("wall.toml");
+    std::fs::write(&scene, settling_wall(12)).unwrap();
+    let scene = scene.to_str().unwrap();
+    let whole = dir.join("whole");
+    let o = dda(&["run", scene, "--out", whole.to_str().unwrap(), "--quiet"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(summary(&whole)["steps"].as_u64().unwrap() > 0);
+    let out = dir.join("int");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_dda"))
+        .args(["run", scene, "--out", out.to_str().unwrap()])
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut err = std::io::BufReader::new(child.stderr.take().unwrap());
+    let mut said = String::new();
+    while !said.contains("settling:") {
+        let mut line = String::new();
+        assert!(err.read_line(&mut line).unwrap() > 0, "{said}");
+        said.push_str(&line);
+    }
+    let sent = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    let mut rest = String::new();
+    std::io::Read::read_to_string(&mut err, &mut rest).unwrap();
+    said.push_str(&rest);
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130), "{said}");
+    assert!(
+        said.contains("SIGINT") && said.contains("dda resume"),
+        "{said}"
+    );
+    assert!(
+        !said.contains("settled in"),
+        "the settling ended before the signal: {said}"
+    );
+    let ck = dda_core::Checkpoint::load(&dir.join(".int.partial").join("checkpoint.bin")).unwrap();
+    assert_eq!(ck.engine.state.totals.steps, 0);
+    assert!(!ck.engine.state.settled);
+    let o = dda(&["resume", out.to_str().unwrap(), "--quiet"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(untimed_summary(&out), untimed_summary(&whole));
+    assert_eq!(
+        untimed_history(&out.join("history.csv")),
+        untimed_history(&whole.join("history.csv"))
+    );
+}
+
 /// Absurd values are refused by `dda check` with file, key and line, where they once
 /// passed and failed late or never ended; arrays of the wrong length are errors in TOML
 /// as in JSON (TOML once dropped the extra components).
