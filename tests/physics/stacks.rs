@@ -359,17 +359,7 @@ fn masonry_slides(m: Masonry, settle: Option<bool>) -> Vec<f64> {
     let start: Vec<DVec2> = model.blocks.iter().map(|b| b.polygon.centroid()).collect();
     let mut sim = Simulation::new(model, RunOptions::default());
     sim.run(|_, _| {}).unwrap();
-    let t = sim.time();
-    let (s, c) = m.tilt_deg.to_radians().sin_cos();
-    // The base turns counter-clockwise: down the slope is -(cos a, sin a).
-    let down = DVec2::new(-c, -s);
-    let exact = 0.5 * 9.81 * (s - c * m.friction_deg.to_radians().tan()) * t * t;
-    sim.blocks()
-        .iter()
-        .zip(&start)
-        .skip(1)
-        .map(|(b, s0)| (b.polygon.centroid() - *s0).dot(down) / exact)
-        .collect()
+    m.slide_ratios(&sim, &start)
 }
 
 /// Walls and stacks built with the library's own builder (`dda::bench::Masonry`, the

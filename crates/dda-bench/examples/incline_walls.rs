@@ -32,19 +32,9 @@ fn worst(m: Masonry) -> Result<f64, String> {
     let start: Vec<_> = model.blocks.iter().map(|b| b.polygon.centroid()).collect();
     let mut sim = Simulation::new(model, RunOptions::default());
     sim.run(|_, _| {}).map_err(|e| e.to_string())?;
-    let (sin, cos) = m.tilt_deg.to_radians().sin_cos();
-    let t = sim.time();
-    let exact = 0.5 * 9.81 * (sin - cos * m.friction_deg.to_radians().tan()) * t * t;
-    // The base turns counter-clockwise: down the slope is -(cos a, sin a).
-    Ok(sim
-        .blocks()
+    Ok(m.slide_ratios(&sim, &start)
         .iter()
-        .zip(&start)
-        .skip(1)
-        .map(|(b, c0)| {
-            let d = b.polygon.centroid() - *c0;
-            (-(d.x * cos + d.y * sin) / exact - 1.0).abs()
-        })
+        .map(|r| (r - 1.0).abs())
         .fold(0.0, f64::max))
 }
 

@@ -6,7 +6,9 @@
 //! about the base's top-left corner, gravity staying vertical.
 
 use crate::column::{rock, rock_block};
+use dda_core::Simulation;
 use dda_core::scene::{Analysis, BlockSpec, Joint, Mode, Plane, Scene};
+use dda_geom::DVec2;
 use std::collections::BTreeMap;
 
 /// The layout of a structure of rectangular blocks.
@@ -119,6 +121,23 @@ impl Masonry {
     /// The structure's width, m.
     pub fn span(&self) -> f64 {
         self.outlines().iter().map(|o| o[2]).fold(0.0, f64::max)
+    }
+
+    /// Each block's slide down the tilted base since `start` (the blocks' centroids when
+    /// the run began, base first) over g (sin a - cos a tan phi) t^2 / 2 at the time
+    /// `sim` has reached: 1 for a block sliding as a rigid body slides at its friction
+    /// limit. The base turns counter-clockwise, so down the slope is -(cos a, sin a).
+    pub fn slide_ratios(&self, sim: &Simulation, start: &[DVec2]) -> Vec<f64> {
+        let (sin, cos) = self.tilt_deg.to_radians().sin_cos();
+        let down = DVec2::new(-cos, -sin);
+        let t = sim.time();
+        let exact = 0.5 * 9.81 * (sin - cos * self.friction_deg.to_radians().tan()) * t * t;
+        sim.blocks()
+            .iter()
+            .zip(start)
+            .skip(1)
+            .map(|(b, s0)| (b.polygon.centroid() - *s0).dot(down) / exact)
+            .collect()
     }
 
     /// The scene: the base (fixed, one block height deep, one width beyond each side),

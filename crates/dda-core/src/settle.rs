@@ -190,10 +190,10 @@ impl Simulation {
             return Ok(true);
         }
         let settled = self.settle(&mut watch);
-        match &settled {
-            Ok(false) => self.state.settled = false,
-            Err(e) => self.diagnose(e, self.state.dt, None),
-            Ok(true) => {}
+        // Settled, with nothing to settle, or failed: done either way. Stopped: to do.
+        self.state.settled = !matches!(settled, Ok(false));
+        if let Err(e) = &settled {
+            self.diagnose(e, self.state.dt, None);
         }
         settled
     }
@@ -202,9 +202,7 @@ impl Simulation {
     /// of a dynamic run whose scene asks for it and has something to settle; false if
     /// `watch` stopped it (the blocks left as they were).
     fn settle(&mut self, watch: &mut dyn FnMut(&SettleProgress) -> bool) -> Result<bool, SimError> {
-        let settles = self.settles();
-        self.state.settled = true;
-        if !settles {
+        if !self.settles() {
             return Ok(true);
         }
         let p = &self.model.params;
