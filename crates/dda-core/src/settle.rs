@@ -65,11 +65,12 @@ const SETTLE_MAX_STEPS: u32 = 2000;
 /// choice, measured on running-bond walls of 1 x 0.5 m bricks with half bricks at the
 /// course ends, 8 courses of 5 on 30/25 (p 3e10 to 1e12, dt 1 ms): their steady slide
 /// takes hundreds of steps to converge (the pieces of the wall slide at rates that
-/// approach one another by a fraction of a percent a step), and started from a
-/// settling stopped at 1e-3, 1e-4 or 3e-5 the walls parted by 10% to 30% (the slide as
-/// one body is unstable there, docs/method.md section 13); from 1e-5 (400 to 500
-/// steps) they hold to 0.29% (`tests/physics/stacks.rs`). The toppling columns of
-/// `tests/physics/regions.rs` stood to 0.24 mm at 1e-3 already.
+/// approach one another by a fraction of a percent a step), and started from a settling
+/// stopped at 1e-3, 1e-4 or 3e-5 the walls parted by 10% to 30% (the slide as one body
+/// is unstable there,
+/// docs/notes/2026-11-25-10-settling-stacks-and-walls-as-measured.md); from 1e-5 (400
+/// to 500 steps) they hold to 0.29% (`tests/physics/stacks.rs`). The toppling columns
+/// of `tests/physics/regions.rs` stood to 0.24 mm at 1e-3 already.
 const SETTLE_TOLERANCE: f64 = 1e-5;
 
 /// Steps without progress after which the settling stops: the change of the motion has
@@ -88,8 +89,8 @@ const SETTLE_STALL: u32 = 200;
 /// gives an inertia of a quarter of the penalty): at 1 (until 2026-11-25) the settling
 /// took 700 to 860 steps, often without converging, and 6 and 8 courses parted by 1.6%
 /// to 24% in the run; at 0.01 (with the rounds below), 130 to 450 steps, within 0.18%
-/// to 0.82% (docs/method.md section 13). Stiff walls and stacks settled with steps as
-/// long already.
+/// to 0.82% (docs/notes/2026-11-25-10-settling-stacks-and-walls-as-measured.md). Stiff
+/// walls and stacks settled with steps as long already.
 const SETTLE_INERTIA: f64 = 0.01;
 
 /// Rounds of settling, each after the first begun by taking back the slide of the ones
@@ -108,10 +109,12 @@ const SETTLE_ROUNDS: u32 = 5;
 
 /// The step after the last round's slide is taken back must move as the round's last
 /// step did, to this share of the first step's largest motion (a change 1,000 times the
-/// settling's tolerance, [`SETTLE_TOLERANCE`]); else the way back is undone. Our choice,
-/// measured on 130 stacks and walls (`docs/method.md` section 13): the walls that slide
-/// steadily change by at most 7.5e-4; walls whose end groups topple while they settle,
-/// by 86 to 99, and without the check the run's first step found energy created.
+/// settling's tolerance, [`SETTLE_TOLERANCE`]); else the way back is undone. Our
+/// choice, measured on 130 stacks and walls
+/// (`docs/notes/2026-11-25-10-settling-stacks-and-walls-as-measured.md`): the walls
+/// that slide steadily change by at most 7.5e-4; walls whose end groups topple while
+/// they settle, by 86 to 99, and without the check the run's first step found energy
+/// created.
 const SETTLE_CHECK: f64 = 1e-2;
 
 /// What one round of settling did ([`Simulation::relax`]).
