@@ -123,47 +123,85 @@ fn bounce(analysis: &str, rock: &str) -> f64 {
     up / (2.0 * 9.81 * 0.5f64).sqrt()
 }
 
-/// Rigid blocks: restitution at least 0.95 with `impact_steps = 10` (measured 0.997 for
-/// the collision and 1.000 for the drop), momentum kept to 1e-9; without the key the
-/// same scenes lose a quarter and a half of the speed (0.754 and 0.497 measured), so
-/// the test would fail without the mechanism.
+/// Rigid blocks: restitution at least 0.95 with `impact_steps = 10` (the issue's
+/// acceptance), and within 1e-3 of 1: the springs act in the steps they close and open
+/// in for the share of the step they are closed, taken to a thousandth of itself, so
+/// each event is right to a thousandth of the impact's energy (see the elastic blocks'
+/// test below; measured 1.0000 for the collision and 0.9998 for the drop; 0.9973 and
+/// 1.0000 before, a loss at the closing and a push at the opening that happened to
+/// cancel). Momentum kept to 1e-9. Without the key the same scenes lose a quarter and a
+/// half of the speed (0.754 and 0.497 measured), so the test would fail without the
+/// mechanism.
 #[test]
 fn rigid_impacts_resolved_in_ten_steps_keep_their_speed() {
     let analysis = format!("{RIGID}\nimpact_steps = 10");
     let (e, dp, _) = collide(&analysis, NO_ELASTICITY);
-    assert!(e >= 0.95, "collision restitution {e}");
+    assert!(
+        e >= 0.95 && (e - 1.0).abs() <= 1e-3,
+        "collision restitution {e}"
+    );
     assert!(dp < 1e-9, "momentum changed by {dp}");
     let b = bounce(&analysis, NO_ELASTICITY);
-    assert!(b >= 0.95, "drop restitution {b}");
+    assert!(b >= 0.95 && (b - 1.0).abs() <= 1e-3, "drop restitution {b}");
     let (e0, dp0, _) = collide(RIGID, NO_ELASTICITY);
     let b0 = bounce(RIGID, NO_ELASTICITY);
     assert!(e0 < 0.8 && b0 < 0.8, "without the key: {e0}, {b0}");
     assert!(dp0 < 1e-9, "momentum changed by {dp0}");
-    // The rule alone, the step not held down: the collision spans a step or two, and
-    // the push the carried acceleration keeps for half the step the contact opens in
-    // creates energy (59% of the reference, measured): the guard stops the run.
+    // The rule alone, the step not held down: the contact (3.6 ms) lies within one step
+    // of 5 ms. The step the contact opens in carries only the part of its step-start
+    // force that acts until the blocks part (`Simulation::release`), and carries on the
+    // acceleration of that step's own end: no energy is created, and the blocks part
+    // slower than they met (0.76 measured). Carried whole, the push gained 59% of the
+    // reference energy, and the guard stopped the run.
     let rule = format!("{RIGID}\nintegration = \"average-acceleration\"");
     let mut sim = guarded(collision(&rule, NO_ELASTICITY));
-    let err = sim.run(|_, _| {}).unwrap_err().to_string();
-    assert!(err.contains("energy created"), "{err}");
+    let e0 = mechanical(&sim);
+    sim.run(|_, _| {}).unwrap();
+    let (l, r) = (sim.blocks()[0].velocity, sim.blocks()[1].velocity);
+    assert!(mechanical(&sim) <= e0, "{} against {e0}", mechanical(&sim));
+    assert!(r[0] - l[0] > 0.0, "the blocks did not part: {l:?} {r:?}");
 }
 
 /// Elastic blocks (E = 1e10 Pa, as stiff as the contact): the impact leaves part of its
-/// energy in the blocks' strain, so the rebound speed falls short of 1 (0.988 for the
-/// collision at N = 10), but kinetic plus strain energy is kept within 2% (it is
-/// exactly conserved by the average-acceleration rule while the springs are closed;
-/// the step a contact opens in may gain or lose a little). Stiffer blocks (E = 1e12
-/// Pa) rebound at restitution 0.95 and more.
+/// energy in the blocks' strain, so the rebound speed falls short of 1 (0.986 for the
+/// collision at N = 10). Kinetic plus strain energy, taken at the first step after the
+/// blocks part, is kept: the rule conserves it while the contacts are closed, and in
+/// the steps they close and open in, their springs act for the share of the step they
+/// are closed (`Simulation::engaged`, `Simulation::release`), so that their mean force
+/// does the work of the energy the spring stores or gives back. The shares are taken to
+/// a thousandth of themselves (`SHARE_TOLERANCE`), and the gap crosses zero at a steady
+/// rate to second order (a linear spring's force, and so the acceleration it causes,
+/// vanishes there): each of the two events is right to a thousandth of the spring's
+/// energy, at most the impact's: kept to 1e-3 (4e-5 measured at E = 1e10 Pa). Before,
+/// the step they closed in lost up to pi^2 / 800 of the energy (0.75% measured), and the
+/// one they opened in pushed for half of it: blocks of E = 2e10 to 1e11 Pa parted faster
+/// than they met. After the impact the rule is Shi's again, whose damping takes the
+/// blocks' vibration. Stiffer blocks (E = 1e12 Pa) rebound at restitution 0.95 and more.
 #[test]
 fn elastic_blocks_keep_the_impacts_energy_as_motion_and_strain() {
-    let elastic = "young = 1e10\npoisson = 0.25";
-    let (e, dp, kept) = collide("impact_steps = 10", elastic);
-    assert!(e < 1.0, "{e}");
-    assert!(
-        (kept - 1.0).abs() < 0.02,
-        "energy kept {kept}, restitution {e}"
-    );
-    assert!(dp < 1e-9, "momentum changed by {dp}");
+    let bound = 1e-3;
+    for young in ["1e10", "2e10", "5e10", "1e11"] {
+        let elastic = format!("young = {young}\npoisson = 0.25");
+        let mut sim = guarded(collision("impact_steps = 10", &elastic));
+        let e0 = mechanical(&sim);
+        let (mut closed, mut parted) = (false, None);
+        sim.run(|s, rec| {
+            closed |= rec.closed_contacts > 0;
+            if closed && rec.closed_contacts == 0 && parted.is_none() {
+                parted = Some(mechanical(s) / e0);
+            }
+        })
+        .unwrap();
+        let kept = parted.unwrap();
+        assert!(
+            (kept - 1.0).abs() <= bound,
+            "E = {young}: energy kept {kept} at the parting (bound {bound})"
+        );
+        let (l, r) = (sim.blocks()[0].velocity, sim.blocks()[1].velocity);
+        let (e, dp) = (r[0] - l[0], (l[0] + r[0] - 1.0).abs() + (l[1] + r[1]).abs());
+        assert!(e < 1.0, "E = {young}: restitution {e}");
+        assert!(dp < 1e-9, "E = {young}: momentum changed by {dp}");
+    }
     let stiff = "young = 1e12\npoisson = 0.25";
     let (e, _, _) = collide("impact_steps = 10", stiff);
     assert!(e >= 0.95, "collision restitution {e}");

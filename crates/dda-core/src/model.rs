@@ -265,10 +265,11 @@ impl Scene {
         if params.integration == Integration::AverageAcceleration && params.impact_steps.is_none() {
             warnings.push(invalid(
                 "analysis.integration",
-                "the average-acceleration rule without impact_steps: a contact that opens \
-                 within a step keeps its push for half of it, which can create energy when \
-                 impacts are not resolved in time (the physics guard then stops the run); \
-                 give impact_steps (10 is a good start)",
+                "the average-acceleration rule without impact_steps: it damps no vibration \
+                 (blocks near their toppling limit rock, and walls sliding on a slope part), \
+                 and impacts that span a step or two lose a quarter to a half of their speed \
+                 under it as under the default rule; give impact_steps (10 is a good start), \
+                 whose default rule takes it only in impacts",
             ));
         }
         if params.integration == Integration::AverageInImpacts && params.impact_steps.is_none() {

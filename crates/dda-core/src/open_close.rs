@@ -5,6 +5,7 @@
 //! of the factor while few springs changed.
 
 use crate::assembly::Spring;
+use crate::contact_law::DECISION_BAND;
 use crate::diagnosis::SimError;
 use crate::simulation::Simulation;
 use crate::solver::RankOne;
@@ -26,6 +27,13 @@ use dda_geom::Motion;
 /// of 200 the run saved 302 factorisations and lost more in low-rank solves
 /// (`docs/performance.md`).
 pub(crate) const MAX_RANK: usize = 96;
+
+/// How far a share of the step a contact acts for (`Simulation::engaged`,
+/// `Simulation::release`) may move between the trial it was taken from and the next,
+/// relative to it, before the open-close iteration takes one more iteration. The energy
+/// the contact's spring gives or takes in the step is wrong by that share of itself. Our
+/// choice: the contact law's band, [`DECISION_BAND`], a thousandth.
+pub(crate) const SHARE_TOLERANCE: f64 = DECISION_BAND;
 
 impl Simulation {
     /// Predicts the contact states of a step before its first OCI iteration: the step's
@@ -112,7 +120,10 @@ impl Simulation {
             }
             changed += activated;
             watch.lap(rec, Phase::Detection);
-            if changed == 0 {
+            // The shares of the step that contacts closing or opening within it act for
+            // are taken from the trial before (`Simulation::engaged`, `release`): one more
+            // iteration where this trial moves one of them.
+            if changed == 0 && (it == max_oci || !self.shares_moved()) {
                 return Ok((true, it));
             }
         }
@@ -167,6 +178,33 @@ impl Simulation {
             watch.lap(rec, Phase::Assembly);
         }
         self.assemble_and_factorise(rec)
+    }
+
+    /// Whether the current trial moves a share of the step that a contact closing or
+    /// opening within it acts for (`Simulation::engaged`, `Simulation::release`) from the
+    /// share the trial was solved with, by more than [`SHARE_TOLERANCE`] of the share and
+    /// by a force beyond the contact law's band (the contact's normal force times the
+    /// change; a change of negligible force keeps the state, as the decisions do,
+    /// `contact_law`).
+    fn shares_moved(&self) -> bool {
+        let contacts = &self.state.contacts.contacts;
+        let scale = &self.scratch.force_scale;
+        let moved = |k: usize, now: f64, then: f64, force: f64| {
+            let key = contacts[k].key;
+            let band = DECISION_BAND
+                * scale[key.vertex_block as usize].min(scale[key.edge_block as usize]);
+            let change = (now - then).abs();
+            change > SHARE_TOLERANCE * now.max(then) && change * force > band
+        };
+        self.scratch.engaged.iter().any(|&(k, before)| {
+            let k = k as usize;
+            moved(k, self.engaged(k), 1.0 - before, contacts[k].normal_force)
+        }) || self.scratch.released.iter().any(|&(k, f, _)| {
+            let k = k as usize;
+            let force = self.scratch.saved.get(k).map_or(0.0, |c| c.normal_force);
+            self.release(k)
+                .is_some_and(|(_, now, _)| moved(k, 1.0 + now, 1.0 + f, force))
+        })
     }
 
     /// The difference between the springs in effect and those in the factorised (or,

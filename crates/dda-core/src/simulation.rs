@@ -95,8 +95,20 @@ pub(crate) struct Scratch {
     pub(crate) springs: Vec<Spring>,
     /// The shear rows of the springs' and friction forces' contact states.
     pub(crate) sheared: ShearRows,
-    /// Friction forces in effect: contact, magnitude, row.
+    /// Friction forces in effect: contact, magnitude, row; and the releases of contacts
+    /// open since the step's start (`Simulation::release`).
     pub(crate) forces: Vec<(u32, f64, Row)>,
+    /// The releases among `forces`: the part of the accelerations carried into the step
+    /// that the step took back, which the accelerations it carries on leave out.
+    pub(crate) released: Vec<(u32, f64, Row)>,
+    /// Per block (scene index), where the step's system left the rule's forces: those
+    /// of `released`, less the shares of `engaged` contacts' end forces it left out
+    /// (the step's update, `update.rs`).
+    pub(crate) taken_back: Vec<Vec6>,
+    /// The contacts closed within the step under the average-acceleration rule, with the
+    /// share of the step before they closed (`Simulation::engaged`): their forces enter
+    /// the step's system at the share after it, and the step's end acceleration whole.
+    pub(crate) engaged: Vec<(u32, f64)>,
     pub(crate) factored_springs: Vec<Spring>,
     pub(crate) factored_forces: Vec<(u32, f64, Row)>,
     pub(crate) changes: Vec<RankOne>,
@@ -325,6 +337,9 @@ impl Simulation {
                 springs: Vec::new(),
                 sheared: ShearRows::default(),
                 forces: Vec::new(),
+                released: Vec::new(),
+                taken_back: Vec::new(),
+                engaged: Vec::new(),
                 factored_springs: Vec::new(),
                 factored_forces: Vec::new(),
                 changes: Vec::new(),

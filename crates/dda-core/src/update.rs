@@ -8,6 +8,7 @@ use crate::guard::add_kinetic;
 use crate::kinematics::{elasticity, mass_matrix};
 use crate::scene::{Integration, Mode};
 use crate::simulation::Simulation;
+use crate::solver::{chol, chol_solve};
 use crate::state::StepRecord;
 use dda_geom::{check_displacement, displace_point};
 
@@ -43,6 +44,34 @@ impl Simulation {
         // step just taken, by the rule it was taken by.
         let carry = dynamic && model.params.integration != Integration::ConstantAcceleration;
         let average = self.step_rule() == StepRule::Average;
+        // Where the step's system left the rule's, by block (`w`): the forces it took
+        // back from the accelerations carried in (contacts released since its start,
+        // `Simulation::release`), less the shares of the end forces of contacts that
+        // closed within it that it left out (`Simulation::engaged`). The step moved by
+        // D = V dt + (A + M^-1 w + a') dt^2 / 4, a' its system's end acceleration; the
+        // acceleration carried on is the step end's, whole: a' - M^-1 (shares left out),
+        // that is 4 (D - V dt) / dt^2 - (A + M^-1 w).
+        let mut taken_back = std::mem::take(&mut self.scratch.taken_back);
+        taken_back.clear();
+        taken_back.resize(self.state.blocks.len(), [0.0; 6]);
+        for (_, f, row) in &self.scratch.released {
+            for (b, c) in row.blocks.iter().zip(&row.c) {
+                for (t, x) in taken_back[*b as usize].iter_mut().zip(c) {
+                    *t += f * x;
+                }
+            }
+        }
+        for &(k, before) in &self.scratch.engaged {
+            let k = k as usize;
+            let c = self.state.contacts.contacts[k];
+            let force = self.contact_forces(k, &c, true);
+            let blocks = self.scratch.rows[k].blocks;
+            for (b, f) in blocks.iter().zip(&force) {
+                for (t, x) in taken_back[*b as usize].iter_mut().zip(f) {
+                    *t -= before * x;
+                }
+            }
+        }
         let ground_velocity = self.model.ground.as_ref().map(|g| g.at(t + dt).1);
         for i in 0..self.state.blocks.len() {
             if self.free[i].is_none() {
@@ -60,6 +89,20 @@ impl Simulation {
             }
             let d = self.scratch.d[i];
             let c = self.scratch.shapes[i].centroid;
+            // A + M^-1 w (w zero unless a contact of the block closed or opened within
+            // the step).
+            let carried_in = if average && taken_back[i] != [0.0; 6] {
+                let f = self.free[i].map_or(0, |f| f as usize);
+                let mut back = taken_back[i];
+                match chol(&self.scratch.mass[f], self.nd) {
+                    Some(l) => chol_solve(&l, self.nd, &mut back),
+                    None => back = [0.0; 6],
+                }
+                let a = &self.state.blocks[i].acceleration;
+                std::array::from_fn(|v| a[v] + back[v])
+            } else {
+                self.state.blocks[i].acceleration
+            };
             let b = &mut self.state.blocks[i];
             // Cannot fail: every motion was checked above.
             b.polygon.displace(c, &d).map_err(|_| inverted(i))?;
@@ -67,7 +110,7 @@ impl Simulation {
                 if carry {
                     let change = d[v] - b.velocity[v] * dt;
                     b.acceleration[v] = if average {
-                        4.0 * change / (dt * dt) - b.acceleration[v]
+                        4.0 * change / (dt * dt) - carried_in[v]
                     } else {
                         2.0 * change / (dt * dt)
                     };
@@ -94,6 +137,7 @@ impl Simulation {
             }
             self.scratch.shapes[i].set(&b.polygon);
         }
+        self.scratch.taken_back = taken_back;
         self.state.t += dt;
         self.state.accelerations_known |= carry;
         Ok(())

@@ -14,7 +14,7 @@
 //! solves of an iteration that changed few springs; `sweeps` the triangular sweeps.
 
 pub use self::iterative::Iterated;
-pub(crate) use self::iterative::{chol, forward_solve};
+pub(crate) use self::iterative::{chol, chol_solve, forward_solve};
 pub use self::low_rank::RankOne;
 use self::sweeps::{Factor, Scratch, Tree};
 use crate::kinematics::{Mat6, Vec6};
