@@ -148,6 +148,7 @@ pub(crate) fn rock(density: f64, young: f64, poisson: f64) -> BTreeMap<String, M
             density,
             young: Some(young),
             poisson: Some(poisson),
+            damping: None,
         },
     )])
 }

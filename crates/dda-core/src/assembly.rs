@@ -565,9 +565,16 @@ pub(crate) fn block_terms(
     }
     if eff.elasticity {
         let e = elasticity(mat.young, mat.poisson);
+        // The material's damping (`materials.*.damping`, beta): a viscous stress
+        // beta C e' at the step's mean strain rate e' = strain / dt, in a dynamic step.
+        let viscous = if p.mode == Mode::Dynamic {
+            mat.damping / dt
+        } else {
+            0.0
+        };
         for a in 0..3 {
             for bb in 0..3 {
-                k[3 + a][3 + bb] += m.area * e[a][bb];
+                k[3 + a][3 + bb] += m.area * e[a][bb] * (1.0 + viscous);
             }
             f[3 + a] -= m.area * b.stress[a];
         }

@@ -93,6 +93,13 @@ pub const YOUNG: Range = Range {
     max: 1e13,
     unit: "Pa",
 };
+/// `materials.*.damping`: the stiffness-proportional damping time of the blocks' strain
+/// (0 to 1 s; a second damps a strain vibration of 2 rad/s critically).
+pub const DAMPING: Range = Range {
+    min: 0.0,
+    max: 1.0,
+    unit: "s",
+};
 /// `joints.*.cohesion` and `joints.*.tensile_strength`.
 pub const STRENGTH: Range = Range {
     min: 0.0,

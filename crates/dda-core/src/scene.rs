@@ -334,6 +334,10 @@ pub struct Material {
     /// Poisson's ratio (needed when blocks are deformable).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub poisson: Option<f64>,
+    /// Stiffness-proportional damping of the blocks' strain, s (docs/method.md section
+    /// 12): a viscous stress of this time times the elastic stress rate. None: 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub damping: Option<f64>,
 }
 
 /// A `[joints.NAME]` table: contact properties.

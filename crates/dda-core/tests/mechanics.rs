@@ -41,6 +41,7 @@ fn rock(density: f64, young: f64) -> BTreeMap<String, Material> {
             density,
             young: Some(young),
             poisson: Some(0.25),
+            damping: None,
         },
     )])
 }

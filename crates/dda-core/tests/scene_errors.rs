@@ -133,7 +133,7 @@ fn nth_line_of(text: &str, from: &str, n: usize) -> usize {
 #[test]
 fn every_bad_input_names_key_and_line() {
     const SLIDER: &str = "vertices = [[0.0, 1.0]";
-    let cases: [(&str, &str, &str, &str); 14] = [
+    let cases: [(&str, &str, &str, &str); 16] = [
         // (what, line to replace, replacement, expected key)
         (
             "clockwise",
@@ -191,6 +191,18 @@ fn every_bad_input_names_key_and_line() {
             "materials.rock.density",
         ),
         (
+            "damping < 0",
+            "poisson",
+            "poisson = 0.3\ndamping = -1e-3",
+            "materials.rock.damping",
+        ),
+        (
+            "damping > 1 s",
+            "poisson",
+            "poisson = 0.3\ndamping = 5.0",
+            "materials.rock.damping",
+        ),
+        (
             "time step <= 0",
             "time_step",
             "time_step = 0.0",
@@ -216,6 +228,8 @@ fn every_bad_input_names_key_and_line() {
         assert!(e.key.starts_with(key), "{what}: {e}");
         let line = if to.starts_with("frame =") {
             line_of(&text, "frame =")
+        } else if let Some((_, added)) = to.rsplit_once('\n') {
+            line_of(&text, added)
         } else {
             line_of(&text, to)
         };
