@@ -271,10 +271,7 @@ impl Simulation {
                         });
                     }
                     ContactState::Sliding if c.slide_dir != 0.0 => {
-                        let mut limit = c.normal_force.max(0.0) * j.tan_phi;
-                        if c.bonded {
-                            limit += j.cohesion * contact_length(&c, &self.scratch.shapes);
-                        }
+                        let limit = self.friction_limit(&c, &j);
                         let (shapes, half) = (&self.scratch.shapes, &self.scratch.half);
                         let row =
                             self.scratch
@@ -386,10 +383,7 @@ impl Simulation {
                 Some((-self.model.params.shear_penalty * value(&row), row))
             }
             ContactState::Sliding if c.slide_dir != 0.0 => {
-                let mut limit = n * j.tan_phi;
-                if c.bonded {
-                    limit += j.cohesion * contact_length(c, shapes);
-                }
+                let limit = self.friction_limit(c, &j);
                 let row = self
                     .scratch
                     .sheared
@@ -408,6 +402,16 @@ impl Simulation {
             }
         }
         force
+    }
+
+    /// The friction force of sliding contact `c` under joint `j`: its normal force times
+    /// tan phi, and its cohesion over its length while it is bonded.
+    pub(crate) fn friction_limit(&self, c: &Contact, j: &JointProps) -> f64 {
+        let mut limit = c.normal_force.max(0.0) * j.tan_phi;
+        if c.bonded {
+            limit += j.cohesion * contact_length(c, &self.scratch.shapes);
+        }
+        limit
     }
 
     /// The row of spring `s` in this attempt: the contact's normal row, or its shear row

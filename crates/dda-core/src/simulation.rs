@@ -584,7 +584,7 @@ impl Simulation {
                 self.predict_states(&mut rec)?;
                 first_attempt = false;
             }
-            let (converged, iterations) = self.open_close_iteration(&mut rec)?;
+            let (converged, iterations, for_forces) = self.open_close_iteration(&mut rec)?;
             self.state.totals.oci_iterations += iterations as u64;
             let reason;
             if converged {
@@ -592,7 +592,9 @@ impl Simulation {
                 *worst = moved_most;
                 if disp <= d_max && rot <= theta_max {
                     rec.oci = iterations;
-                    let growth = step_growth(iterations, max_oci, disp, rot, d_max, theta_max);
+                    // Iterations that changed no state are no sign of a hard step.
+                    let decided = iterations - for_forces;
+                    let growth = step_growth(decided, max_oci, disp, rot, d_max, theta_max);
                     self.accept(dt, &mut rec)?;
                     if landing {
                         self.state.t = target;
