@@ -81,8 +81,10 @@ fn run_case(case: &Case, varied: &'static str, value: f64) -> Run {
     analysis.settle = Some(false);
     let mut scene = build(analysis);
     // The base setting's deformable blocks, for the rebound too (its builder's block is
-    // rigid, the body its closed form is for; the impacts study below runs it so).
+    // rigid, the body its closed form is for; the impacts study below runs it so),
+    // undamped: the study measures the time stepping.
     scene.analysis.deformable = true;
+    scene.materials = dda_bench::undamped(scene.materials);
     scene.scale_tolerances(r_tol);
     let mut run = Run {
         varied,

@@ -1,5 +1,6 @@
 //! Built-in scenes: runnable without a file (`dda run NAME`, `dda scenes`).
 
+use crate::column::undamped;
 use crate::hard_cases::HARD_CASES;
 use crate::masonry::Masonry;
 use crate::paper::PAPER_COLUMNS;
@@ -112,11 +113,13 @@ pub const BUILTINS: [Builtin; 15] = [
     },
 ];
 
-/// `scene` starting from its unloaded contacts (`settle = false`): the built-in walls
-/// and grid, run beside ntdda, which starts so (docs/performance.md), and whose standing
-/// on flush joints the open-close iteration is tested on from that start.
+/// `scene` starting from its unloaded contacts (`settle = false`), its blocks' strain
+/// undamped (`damping = 0`): the built-in walls and grid, run beside ntdda, which starts
+/// so and has no damping (docs/performance.md), and whose standing on flush joints the
+/// open-close iteration is tested on from that start.
 fn unloaded(mut scene: Scene) -> Scene {
     scene.analysis.settle = Some(false);
+    scene.materials = undamped(scene.materials);
     scene
 }
 

@@ -79,7 +79,7 @@ pub fn column_scene(name: &str, blocks: &[ConvexPolygon], analysis: Analysis) ->
     Scene {
         name: name.into(),
         analysis,
-        materials: rock(2600.0, 1e9, 0.3),
+        materials: undamped(rock(2600.0, 1e9, 0.3)),
         joints: BTreeMap::from([("default".into(), Joint::default())]),
         blocks: specs,
         joint_sets: BTreeMap::new(),
@@ -140,7 +140,17 @@ pub(crate) fn rock_block(id: &str, vertices: Vec<[f64; 2]>, fixed: bool) -> Bloc
     }
 }
 
-/// The materials of a one-rock scene: `rock` with this density, E and nu.
+/// `materials` with no damping of the blocks' strain (`damping = 0`): the paper's scenes,
+/// which Shi's undamped blocks are for, and the scenes run beside ntdda.
+pub fn undamped(mut materials: BTreeMap<String, Material>) -> BTreeMap<String, Material> {
+    for m in materials.values_mut() {
+        m.damping = Some(0.0);
+    }
+    materials
+}
+
+/// The materials of a one-rock scene: `rock` with this density, E and nu, its blocks'
+/// strain damped as the scene format's default (`damping` unset).
 pub(crate) fn rock(density: f64, young: f64, poisson: f64) -> BTreeMap<String, Material> {
     BTreeMap::from([(
         "rock".into(),

@@ -25,7 +25,7 @@
 //!   the contact tolerance: its kinetic energy, 7.2 kg at 5 m/s, is 90 J, and a spring of
 //!   3e6 N/m takes it up over 7.7 mm < d_tol = 10 mm.
 
-use crate::column::{paper_analysis, rock, rock_block};
+use crate::column::{paper_analysis, rock, rock_block, undamped};
 use dda_core::Scene;
 use dda_core::scene::{Analysis, BlockSpec, Joint};
 use std::collections::BTreeMap;
@@ -204,7 +204,7 @@ pub fn collision_scene(
     Scene {
         name: name.into(),
         analysis,
-        materials: rock(2000.0, 1e9, 0.25),
+        materials: undamped(rock(2000.0, 1e9, 0.25)),
         joints: BTreeMap::from([("default".into(), Joint::default())]),
         blocks: vec![block("A", a, false), block("B", b, true)],
         joint_sets: BTreeMap::new(),

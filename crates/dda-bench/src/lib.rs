@@ -16,7 +16,9 @@ pub use self::builtin::{BUILTINS, Builtin, DEFAULT_BUILTIN, builtin};
 pub use self::collapse::{
     CollapseWatch, ENERGY_MARGIN, SPEED_FACTOR, Stop, Worst, potential_energy, run_watched,
 };
-pub use self::column::{ColumnError, ColumnSpec, column_scene, jointed_column, paper_analysis};
+pub use self::column::{
+    ColumnError, ColumnSpec, column_scene, jointed_column, paper_analysis, undamped,
+};
 pub use self::hard_cases::{HARD_CASES, HardCase, collision_scene};
 pub use self::masonry::{Layout, Masonry};
 pub use self::paper::{PAPER_COLUMNS, PaperColumn};

@@ -6,7 +6,7 @@
 
 use crate::diagnosis::SimError;
 use crate::effects::Effects;
-use crate::kinematics::{Mat6, Vec6, along, elasticity, mass_matrix};
+use crate::kinematics::{Mat6, Vec6, along, elasticity, mass_matrix, own_damping};
 use crate::scene::{Integration, JointProps, Mode, Model};
 use crate::simulation::Simulation;
 use crate::solver::{BlockSystem, Entry};
@@ -569,10 +569,14 @@ pub(crate) fn block_terms(
     }
     if eff.elasticity {
         let e = elasticity(mat.young, mat.poisson);
-        // The material's damping (`materials.*.damping`, beta): a viscous stress
-        // beta C e' at the step's mean strain rate e' = strain / dt, in a dynamic step.
-        let viscous = if p.mode == Mode::Dynamic {
-            mat.damping / dt
+        // The material's damping (`materials.*.damping`, beta, or the block's own): a
+        // viscous stress beta C e' at the step's mean strain rate e' = strain / dt, in a
+        // dynamic step under Shi's rule (the average-acceleration rule, which an impact
+        // resolved in time takes, keeps every energy: docs/method.md section 12).
+        let viscous = if p.mode == Mode::Dynamic && rule == StepRule::Constant {
+            mat.damping
+                .unwrap_or_else(|| own_damping(&mass, m.area, &e))
+                / dt
         } else {
             0.0
         };

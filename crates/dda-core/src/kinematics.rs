@@ -71,6 +71,72 @@ pub fn mass_matrix(m: &Moments, density: f64) -> Mat6 {
     k
 }
 
+/// A block's own strain damping time, s: 2 / w, w the lowest angular frequency of its
+/// strain (the constant-strain modes of its mass matrix `mass` against its elastic
+/// stiffness `area` C, the rotation held), so that its strain vibration is critically
+/// damped at that frequency and over it: a block deforms under its loads without
+/// ringing (docs/method.md section 12). 0 where the frequency is not defined.
+pub fn own_damping(mass: &Mat6, area: f64, c: &[[f64; 3]; 3]) -> f64 {
+    // w^2 is the smallest eigenvalue of L^-1 K L^-T, L the Cholesky factor of the
+    // strain block of the mass matrix and K = area C.
+    let mut l = [[0.0f64; 3]; 3];
+    for j in 0..3 {
+        let d = mass[3 + j][3 + j] - (0..j).map(|k| l[j][k] * l[j][k]).sum::<f64>();
+        if d.is_nan() || d <= 0.0 {
+            return 0.0;
+        }
+        l[j][j] = d.sqrt();
+        for i in j + 1..3 {
+            l[i][j] =
+                (mass[3 + i][3 + j] - (0..j).map(|k| l[i][k] * l[j][k]).sum::<f64>()) / l[j][j];
+        }
+    }
+    // X = L^-1 K (column by column), then A = X L^-T = L^-1 (L^-1 K)^T.
+    let solve = |b: [f64; 3]| {
+        let mut y = [0.0; 3];
+        for i in 0..3 {
+            y[i] = (b[i] - (0..i).map(|k| l[i][k] * y[k]).sum::<f64>()) / l[i][i];
+        }
+        y
+    };
+    let k: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| area * c[i][j]));
+    let x: [[f64; 3]; 3] = {
+        let cols: [[f64; 3]; 3] = std::array::from_fn(|j| solve([k[0][j], k[1][j], k[2][j]]));
+        std::array::from_fn(|i| std::array::from_fn(|j| cols[j][i]))
+    };
+    let a: [[f64; 3]; 3] = {
+        let cols: [[f64; 3]; 3] = std::array::from_fn(|i| solve(x[i]));
+        std::array::from_fn(|i| std::array::from_fn(|j| 0.5 * (cols[i][j] + cols[j][i])))
+    };
+    let lowest = smallest_eigenvalue(&a);
+    if lowest.is_finite() && lowest > 0.0 {
+        2.0 / lowest.sqrt()
+    } else {
+        0.0
+    }
+}
+
+/// The smallest eigenvalue of a symmetric 3 x 3 matrix (the trigonometric solution of its
+/// characteristic cubic).
+fn smallest_eigenvalue(a: &[[f64; 3]; 3]) -> f64 {
+    let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+    if off == 0.0 {
+        return a[0][0].min(a[1][1]).min(a[2][2]);
+    }
+    let q = (a[0][0] + a[1][1] + a[2][2]) / 3.0;
+    let p2 = (a[0][0] - q).powi(2) + (a[1][1] - q).powi(2) + (a[2][2] - q).powi(2) + 2.0 * off;
+    let p = (p2 / 6.0).sqrt();
+    let b: [[f64; 3]; 3] = std::array::from_fn(|i| {
+        std::array::from_fn(|j| (a[i][j] - if i == j { q } else { 0.0 }) / p)
+    });
+    let det = b[0][0] * (b[1][1] * b[2][2] - b[1][2] * b[2][1])
+        - b[0][1] * (b[1][0] * b[2][2] - b[1][2] * b[2][0])
+        + b[0][2] * (b[1][0] * b[2][1] - b[1][1] * b[2][0]);
+    let phi = (0.5 * det).clamp(-1.0, 1.0).acos() / 3.0;
+    // The three roots are q + 2 p cos(phi + 2 pi k / 3); the smallest is k = 1.
+    q + 2.0 * p * (phi + 2.0 * std::f64::consts::PI / 3.0).cos()
+}
+
 /// Plane elasticity matrix E/(1-nu^2) [[1, nu, 0], [nu, 1, 0], [0, 0, (1-nu)/2]] mapping
 /// (ex, ey, gxy) to (sx, sy, txy); plane strain passes E' and nu' (see the scene model).
 pub fn elasticity(young: f64, poisson: f64) -> [[f64; 3]; 3] {
@@ -86,6 +152,45 @@ pub fn elasticity(young: f64, poisson: f64) -> [[f64; 3]; 3] {
 mod tests {
     use super::*;
     use dda_geom::ConvexPolygon;
+
+    /// A block's own damping time: for a 2 m x 1 m rectangle with nu = 0 the strain
+    /// modes decouple (its product of inertia vanishes), with w^2 = A E / (rho Ixx) for
+    /// the stretch along x (Ixx = w^3 h / 12, the second moment the stretch moves),
+    /// A E / (rho Iyy) along y and 2 A E / (rho (Ixx + Iyy)) in shear: the lowest is the
+    /// stretch along the long side, 3 E / rho; beta = 2 / sqrt(3 E / rho).
+    #[test]
+    fn own_damping_is_critical_at_the_lowest_strain_frequency() {
+        let p =
+            ConvexPolygon::from_coords(&[[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [0.0, 1.0]]).unwrap();
+        let (rho, e) = (2500.0, 1e10);
+        let m = p.moments();
+        let beta = own_damping(&mass_matrix(&m, rho), m.area, &elasticity(e, 0.0));
+        let want = 2.0 / (3.0 * e / rho).sqrt();
+        assert!((beta / want - 1.0).abs() < 1e-12, "{beta} against {want}");
+    }
+
+    /// The smallest eigenvalue of a rotated diag(1, 2, 5) is 1 (to rounding), and of one
+    /// with a double root (diag(3, 3, 7)) 3, to the square root of the rounding: at a
+    /// double root the cubic's angle sits at the end of acos's range, where a rounding
+    /// error eps in its argument moves the angle by sqrt(2 eps).
+    #[test]
+    fn smallest_eigenvalue_of_symmetric_3x3() {
+        let (c, s) = (0.3f64.cos(), 0.3f64.sin());
+        let (c2, s2) = (1.1f64.cos(), 1.1f64.sin());
+        // R = Rz(0.3) Rx(1.1).
+        let r = [[c, -s * c2, s * s2], [s, c * c2, -c * s2], [0.0, s2, c2]];
+        let root_eps = (2.0 * f64::EPSILON).sqrt();
+        for (d, want, tol) in [
+            ([1.0, 2.0, 5.0], 1.0, 1e-12),
+            ([3.0, 3.0, 7.0], 3.0, 10.0 * root_eps),
+        ] {
+            let a: [[f64; 3]; 3] = std::array::from_fn(|i| {
+                std::array::from_fn(|j| (0..3).map(|k| r[i][k] * d[k] * r[j][k]).sum())
+            });
+            let got = smallest_eigenvalue(&a);
+            assert!((got - want).abs() < tol, "{got} against {want}");
+        }
+    }
 
     /// The mass matrix equals rho * sum over a fine grid of T^T T dA (midpoint rule on a
     /// rectangle, where the midpoint rule is exact for the quadratic integrands up to the

@@ -813,23 +813,24 @@ pub struct MaterialProps {
     pub young: f64,
     /// Effective Poisson's ratio (nu, or nu/(1-nu) in plane strain).
     pub poisson: f64,
-    /// Stiffness-proportional damping time of the strain, s (0: none).
-    pub damping: f64,
+    /// Stiffness-proportional damping time of the strain, s (0: none); None: each
+    /// block's own ([`crate::kinematics::own_damping`]).
+    pub damping: Option<f64>,
 }
 
 impl Material {
     fn validate(&self, key: &str, params: &Params) -> Result<MaterialProps, Invalid> {
         let density = within(&format!("{key}.density"), self.density, &limits::DENSITY)?;
         let damping = match self.damping {
-            Some(b) => within(&format!("{key}.damping"), b, &limits::DAMPING)?,
-            None => 0.0,
+            Some(b) => Some(within(&format!("{key}.damping"), b, &limits::DAMPING)?),
+            None => None,
         };
         if !params.deformable {
             return Ok(MaterialProps {
                 density,
                 young: 0.0,
                 poisson: 0.0,
-                damping: 0.0,
+                damping: Some(0.0),
             });
         }
         let young = match self.young {
