@@ -26,8 +26,11 @@ pub const CHECKPOINT_MAGIC: [u8; 8] = *b"DDA-CKPT";
 /// contacts' pairs carry the cover detector's deep flag. Version 3: the physics guard's
 /// energy balance and recorded violations; the engine's state as one record and the
 /// running program's record apart from it. Version 4: what has come of each bolt.
-/// Version 6: the iterative solver's counters.
-pub const CHECKPOINT_VERSION: u32 = 6;
+/// Version 6: the iterative solver's counters. Version 7: the same record, but a scene
+/// without `materials.*.damping` now damps its blocks' strain (their own), and the
+/// open-close iteration settles friction forces and the average-acceleration rule's
+/// shares of a step: a run begun before would go on under other mechanics.
+pub const CHECKPOINT_VERSION: u32 = 7;
 
 /// Length of the header before the payload.
 const HEADER_LEN: usize = 24;
