@@ -129,6 +129,12 @@ impl ShearRows {
     }
 }
 
+/// The share of a step after which a gap changing at a steady rate from `g` at the
+/// step's start to `d` at its end crosses zero (`g` and `d` of opposite signs).
+fn crossing(g: f64, d: f64) -> f64 {
+    (-g / (d - g)).clamp(0.0, 1.0)
+}
+
 /// The row of an inactive contact until it becomes active: NaN, so that a read of it
 /// could not pass unseen.
 pub(crate) const NO_ROW: Row = Row {
@@ -271,15 +277,13 @@ impl Simulation {
                         });
                     }
                     ContactState::Sliding if c.slide_dir != 0.0 => {
-                        let limit = self.friction_limit(&c, &j);
+                        let force = -c.slide_dir * share * self.friction_limit(&c, &j);
                         let (shapes, half) = (&self.scratch.shapes, &self.scratch.half);
                         let row =
                             self.scratch
                                 .sheared
                                 .make(k, c.r.clamp(0.0, 1.0), &c, shapes, half);
-                        self.scratch
-                            .forces
-                            .push((contact, -c.slide_dir * share * limit, row));
+                        self.scratch.forces.push((contact, force, row));
                     }
                     _ => {}
                 }
@@ -310,14 +314,35 @@ impl Simulation {
         {
             return 1.0;
         }
-        let normal = self.scratch.rows[k];
-        let g = normal.g0 - normal.driven;
-        let d = normal.eval(&self.scratch.d);
+        let (g, d) = self.step_gaps(k);
         if g > 0.0 && d < 0.0 {
-            (-d / (g - d)).clamp(0.0, 1.0)
+            // The share after the crossing: the step taken backwards, from d to g.
+            crossing(d, g)
         } else {
             1.0
         }
+    }
+
+    /// Contact `k`'s normal gap at the step's start and at the end of the current trial.
+    fn step_gaps(&self, k: usize) -> (f64, f64) {
+        let normal = self.scratch.rows[k];
+        (normal.g0 - normal.driven, normal.eval(&self.scratch.d))
+    }
+
+    /// The share phi of the step contact `k` stays closed for, open in the current trial
+    /// but closed at the step's start and carrying a force then (see
+    /// [`Simulation::release`]); None otherwise.
+    pub(crate) fn released_share(&self, k: usize) -> Option<f64> {
+        let start = self.scratch.saved.get(k)?;
+        if !start.state.is_closed() || start.normal_force <= 0.0 {
+            return None;
+        }
+        let (g0, d) = self.step_gaps(k);
+        Some(if g0 < 0.0 && d > g0 {
+            crossing(g0, d)
+        } else {
+            0.0
+        })
     }
 
     /// The release of contact `k`, open in the current trial of a step under the
@@ -338,21 +363,11 @@ impl Simulation {
     /// the open-close iteration's latest trial (as friction takes its normal force).
     /// None where the contact was not closed at the step's start, or carried no force.
     pub(crate) fn release(&self, k: usize) -> Option<(u32, f64, Row)> {
-        let start = self.scratch.saved.get(k)?;
-        if !start.state.is_closed() || start.normal_force <= 0.0 {
-            return None;
-        }
-        let normal = self.scratch.rows[k];
-        let g0 = normal.g0 - normal.driven;
-        let d = normal.eval(&self.scratch.d);
-        let phi = if g0 < 0.0 && d > g0 {
-            (-g0 / (d - g0)).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
+        let phi = self.released_share(k)?;
+        let start = &self.scratch.saved[k];
         let row = Row {
             g0: 0.0,
-            blocks: normal.blocks,
+            blocks: self.scratch.rows[k].blocks,
             c: self.contact_forces(k, start, false),
             driven: 0.0,
         };

@@ -197,6 +197,13 @@ pub fn end_cycle(c: &Contact, n: Contact, flips: u8, at_rest: impl FnOnce() -> C
     n
 }
 
+/// The force below which a change of contact `key`'s state is negligible:
+/// [`DECISION_BAND`] of the lighter of its two blocks' force scales (`scale`, by block;
+/// see the module docs).
+pub(crate) fn decision_band(scale: &[f64], key: dda_contact::ContactKey) -> f64 {
+    DECISION_BAND * scale[key.vertex_block as usize].min(scale[key.edge_block as usize])
+}
+
 impl Simulation {
     /// Sets each block's force scale (see the module docs): the magnitude of the external
     /// force on a free block, its weight and its point loads; infinite for a fixed block.
@@ -258,8 +265,7 @@ impl Simulation {
                         d: rows[k].eval(d),
                         // The force below which a change is negligible (see the module
                         // docs).
-                        band: DECISION_BAND
-                            * scale[key.vertex_block as usize].min(scale[key.edge_block as usize]),
+                        band: decision_band(scale, key),
                     };
                     let joint = joint_of(model, material, &c);
                     let decide_at = |trial: Trial| {

@@ -3,6 +3,7 @@
 //! elasticity matrix. Small fixed-size algebra on the stack; a rigid block uses the first 3
 //! columns.
 
+use crate::solver::{chol, forward_solve};
 use dda_geom::{DVec2, Moments};
 
 /// Six block unknowns or a row over them: (u0, v0, r0, ex, ey, gxy).
@@ -79,33 +80,34 @@ pub fn mass_matrix(m: &Moments, density: f64) -> Mat6 {
 pub fn own_damping(mass: &Mat6, area: f64, c: &[[f64; 3]; 3]) -> f64 {
     // w^2 is the smallest eigenvalue of L^-1 K L^-T, L the Cholesky factor of the
     // strain block of the mass matrix and K = area C.
-    let mut l = [[0.0f64; 3]; 3];
-    for j in 0..3 {
-        let d = mass[3 + j][3 + j] - (0..j).map(|k| l[j][k] * l[j][k]).sum::<f64>();
-        if d.is_nan() || d <= 0.0 {
-            return 0.0;
-        }
-        l[j][j] = d.sqrt();
-        for i in j + 1..3 {
-            l[i][j] =
-                (mass[3 + i][3 + j] - (0..j).map(|k| l[i][k] * l[j][k]).sum::<f64>()) / l[j][j];
-        }
+    let mut strain_mass = [[0.0; 6]; 6];
+    for (i, row) in strain_mass.iter_mut().take(3).enumerate() {
+        row[..3].copy_from_slice(&mass[3 + i][3..6]);
     }
-    // X = L^-1 K (column by column), then A = X L^-T = L^-1 (L^-1 K)^T.
-    let solve = |b: [f64; 3]| {
-        let mut y = [0.0; 3];
-        for i in 0..3 {
-            y[i] = (b[i] - (0..i).map(|k| l[i][k] * y[k]).sum::<f64>()) / l[i][i];
-        }
-        y
+    let Some(l) = chol(&strain_mass, 3) else {
+        return 0.0;
     };
-    let k: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| area * c[i][j]));
+    let solve = |mut b: [f64; 6]| {
+        forward_solve(&l, 3, &mut b);
+        b
+    };
+    // X = L^-1 K (column by column), then A = X L^-T = L^-1 (L^-1 K)^T.
     let x: [[f64; 3]; 3] = {
-        let cols: [[f64; 3]; 3] = std::array::from_fn(|j| solve([k[0][j], k[1][j], k[2][j]]));
+        let cols: [[f64; 6]; 3] = std::array::from_fn(|j| {
+            solve([
+                area * c[0][j],
+                area * c[1][j],
+                area * c[2][j],
+                0.0,
+                0.0,
+                0.0,
+            ])
+        });
         std::array::from_fn(|i| std::array::from_fn(|j| cols[j][i]))
     };
     let a: [[f64; 3]; 3] = {
-        let cols: [[f64; 3]; 3] = std::array::from_fn(|i| solve(x[i]));
+        let cols: [[f64; 6]; 3] =
+            std::array::from_fn(|i| solve([x[i][0], x[i][1], x[i][2], 0.0, 0.0, 0.0]));
         std::array::from_fn(|i| std::array::from_fn(|j| 0.5 * (cols[i][j] + cols[j][i])))
     };
     let lowest = smallest_eigenvalue(&a);

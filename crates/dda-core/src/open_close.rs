@@ -5,7 +5,7 @@
 //! of the factor while few springs changed.
 
 use crate::assembly::Spring;
-use crate::contact_law::DECISION_BAND;
+use crate::contact_law::{DECISION_BAND, decision_band};
 use crate::diagnosis::SimError;
 use crate::simulation::Simulation;
 use crate::solver::RankOne;
@@ -195,11 +195,9 @@ impl Simulation {
         let contacts = &self.state.contacts.contacts;
         let scale = &self.scratch.force_scale;
         let moved = |k: usize, now: f64, then: f64, force: f64| {
-            let key = contacts[k].key;
-            let band = DECISION_BAND
-                * scale[key.vertex_block as usize].min(scale[key.edge_block as usize]);
             let change = (now - then).abs();
-            change > SHARE_TOLERANCE * now.max(then) && change * force > band
+            change > SHARE_TOLERANCE * now.max(then)
+                && change * force > decision_band(scale, contacts[k].key)
         };
         self.scratch.engaged.iter().any(|&(k, before)| {
             let k = k as usize;
@@ -207,8 +205,9 @@ impl Simulation {
         }) || self.scratch.released.iter().any(|&(k, f, _)| {
             let k = k as usize;
             let force = self.scratch.saved.get(k).map_or(0.0, |c| c.normal_force);
-            self.release(k)
-                .is_some_and(|(_, now, _)| moved(k, 1.0 + now, 1.0 + f, force))
+            // Both shares as the release's force term holds them, -(1 - phi).
+            self.released_share(k)
+                .is_some_and(|phi| moved(k, 1.0 - (1.0 - phi), 1.0 + f, force))
         })
     }
 
@@ -236,10 +235,9 @@ impl Simulation {
             }
             let share = if carried { self.engaged(k) } else { 1.0 };
             let now = -c.slide_dir * share * self.friction_limit(&c, &j);
-            let band = DECISION_BAND
-                * scale[c.key.vertex_block as usize].min(scale[c.key.edge_block as usize]);
             let change = (now - used).abs();
-            change > SHARE_TOLERANCE * now.abs().max(used.abs()) && change > band
+            change > SHARE_TOLERANCE * now.abs().max(used.abs())
+                && change > decision_band(scale, c.key)
         })
     }
 

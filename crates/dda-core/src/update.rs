@@ -5,7 +5,7 @@
 use crate::assembly::StepRule;
 use crate::diagnosis::SimError;
 use crate::guard::add_kinetic;
-use crate::kinematics::{elasticity, mass_matrix};
+use crate::kinematics::{Vec6, elasticity, mass_matrix};
 use crate::scene::{Integration, Mode};
 use crate::simulation::Simulation;
 use crate::solver::{chol, chol_solve};
@@ -54,23 +54,24 @@ impl Simulation {
         let mut taken_back = std::mem::take(&mut self.scratch.taken_back);
         taken_back.clear();
         taken_back.resize(self.state.blocks.len(), [0.0; 6]);
-        for (_, f, row) in &self.scratch.released {
-            for (b, c) in row.blocks.iter().zip(&row.c) {
-                for (t, x) in taken_back[*b as usize].iter_mut().zip(c) {
-                    *t += f * x;
+        let mut add = |s: f64, blocks: &[u32; 2], forces: &[Vec6; 2]| {
+            for (b, f) in blocks.iter().zip(forces) {
+                for (t, x) in taken_back[*b as usize].iter_mut().zip(f) {
+                    *t += s * x;
                 }
             }
+        };
+        for (_, f, row) in &self.scratch.released {
+            add(*f, &row.blocks, &row.c);
         }
         for &(k, before) in &self.scratch.engaged {
             let k = k as usize;
             let c = self.state.contacts.contacts[k];
-            let force = self.contact_forces(k, &c, true);
-            let blocks = self.scratch.rows[k].blocks;
-            for (b, f) in blocks.iter().zip(&force) {
-                for (t, x) in taken_back[*b as usize].iter_mut().zip(f) {
-                    *t -= before * x;
-                }
-            }
+            add(
+                -before,
+                &self.scratch.rows[k].blocks,
+                &self.contact_forces(k, &c, true),
+            );
         }
         let ground_velocity = self.model.ground.as_ref().map(|g| g.at(t + dt).1);
         for i in 0..self.state.blocks.len() {
