@@ -420,7 +420,10 @@ pub fn run(out: &Path) -> Result<(), String> {
          1.2e-4 and 1.5e-4. With a soft penalty (1e7 N/m) the springs also take long to\n  \
          carry the weight, and friction lags behind N tan(phi). A block set down on a\n  \
          surface with unloaded springs gets this transient; a scene settles by default\n  \
-         (`docs/method.md` section 13), which loads the springs before the run.\n\
+         (`docs/method.md` section 13), which loads the springs before the run. Measured\n  \
+         again after the contact law's changes of 2026-11-25 (`docs/method.md` sections 6\n  \
+         and 12), the ring leaves less: the table's errors are 1.1e-5 to 5.3e-5 across\n  \
+         d_max and 2.6e-5 to 4.8e-4 across the penalties.\n\
          - Rebound: the open-close iteration loses much of the energy of an impact. A\n  \
          contact carries its spring over whole steps and drops it, with the energy it\n  \
          holds, the step it opens; the stiffer the spring against the step (the contact\n  \

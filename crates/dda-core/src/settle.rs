@@ -238,6 +238,7 @@ impl Simulation {
         mp.mode = Mode::Static;
         let shortest = (2.0 * heaviest / (SETTLE_INERTIA * mp.normal_penalty)).sqrt();
         mp.dt0 = mp.dt0.max(shortest);
+        let first = (2.0 * heaviest / mp.normal_penalty).sqrt().min(mp.dt0);
         mp.duration = f64::from(SETTLE_MAX_STEPS) * mp.dt0;
         mp.impact_steps = None;
         mp.integration = Integration::ConstantAcceleration;
@@ -252,6 +253,11 @@ impl Simulation {
             ..self.options
         };
         let mut settling = Simulation::new(model, options);
+        // The first static step's inertia is the penalty: from rest, no block moves further
+        // in it than its contact springs give under its weight, so no joint slides far
+        // before its normal force is loaded. The steps then grow by the run's rule for easy
+        // steps (docs/method.md section 7) to the settling's own.
+        settling.state.dt = first;
         // Blocks written resting on each other touch along flush faces, where a contact
         // starts open: closed from the start, they carry their weight in the first step,
         // where each open-close iteration would otherwise close one more layer of a
