@@ -214,7 +214,10 @@ fn the_example_slope_slides_along_its_bedding_only_when_shaken() {
     for max_oci in [scene.analysis.max_oci, 20] {
         let shaken = crest(1.0, max_oci);
         assert!(shaken.length() > 0.05, "max_oci {max_oci}: moved {shaken}");
-        assert!(shaken.x < 0.0 && shaken.y < 0.0, "max_oci {max_oci}: {shaken}");
+        assert!(
+            shaken.x < 0.0 && shaken.y < 0.0,
+            "max_oci {max_oci}: {shaken}"
+        );
         let dip = (shaken.y / shaken.x).atan().to_degrees();
         assert!(
             (dip - 30.0).abs() < 10.0,
