@@ -3,6 +3,7 @@
 //! bit-identical resume and thread counts. One test binary, so that the suite links once
 //! for all of them.
 
+mod arches;
 mod bolts;
 mod columns;
 mod flush_joints;
