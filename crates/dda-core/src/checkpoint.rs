@@ -29,8 +29,11 @@ pub const CHECKPOINT_MAGIC: [u8; 8] = *b"DDA-CKPT";
 /// Version 6: the iterative solver's counters. Version 7: the same record, but a scene
 /// without `materials.*.damping` now damps its blocks' strain (their own), and the
 /// open-close iteration settles friction forces and the average-acceleration rule's
-/// shares of a step: a run begun before would go on under other mechanics.
-pub const CHECKPOINT_VERSION: u32 = 7;
+/// shares of a step: a run begun before would go on under other mechanics. Version 8:
+/// the same record, under a contact law whose sliding contacts kept from locking slide
+/// back where their motion reversed, and glue whose seam ends hold past their edges'
+/// ends.
+pub const CHECKPOINT_VERSION: u32 = 8;
 
 /// Length of the header before the payload.
 const HEADER_LEN: usize = 24;

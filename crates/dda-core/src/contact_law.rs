@@ -31,12 +31,13 @@
 //! limit). From then on, for the rest of the attempt, it may close, or go from locked to
 //! sliding, but neither open nor lock again; kept from locking where its motion
 //! reversed, it slides the way the locked spring would have pushed at the trial (back,
-//! against its new motion, where the reversal's spring force passes the friction force),
-//! so that friction never pushes blocks along their slip by more than a spring would;
-//! kept from opening, it is decided as a closed contact carrying no normal force (so it
-//! slides if sheared beyond the band, or locks if its motion reversed: [`end_cycle`]). Closed never lets blocks pass into
-//! each other, and sliding bounds its shear force by friction instead of holding a
-//! block that is still moving. The next step decides it afresh.
+//! against its new motion, where the reversal's spring force passes the friction
+//! force), so that friction never pushes blocks along their slip by more than a spring
+//! would; kept from opening, it is decided as a closed contact carrying no normal force
+//! (so it slides if sheared beyond the band, or locks if its motion reversed:
+//! [`end_cycle`]). Closed never lets blocks pass into each other, and sliding bounds its
+//! shear force by friction instead of holding a block that is still moving. The next
+//! step decides it afresh.
 
 use crate::simulation::Simulation;
 
@@ -188,9 +189,9 @@ pub fn decide(
 /// this attempt of a step: past [`CYCLE_LIMIT`] it cycles (see the module docs), and may
 /// close or begin to slide, but neither open nor lock again. Kept from locking where its
 /// motion reversed, it slides the way its spring would have pushed (see [`decide`]).
-/// Kept from opening, it is
-/// decided as closed with no normal force (`at_rest`, the decision at d = 0), so that it
-/// holds no shear beyond the band; that decision stands, a lock included (our choice;
+/// Kept from opening, it is decided as closed with no normal force (`at_rest`, the
+/// decision at d = 0), so that it holds no shear beyond the band; that decision stands,
+/// a lock included (our choice;
 /// kept sliding there instead, walls of 2 m x 0.5 m bricks on 45/40 parted by 23% to
 /// 43% where they held to 0.03%, docs/method.md section 6).
 pub fn end_cycle(c: &Contact, n: Contact, flips: u8, at_rest: impl FnOnce() -> Contact) -> Contact {
