@@ -14,3 +14,4 @@ mod regions;
 mod resume;
 mod seismic;
 mod stacks;
+mod statics;

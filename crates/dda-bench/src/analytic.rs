@@ -44,6 +44,7 @@ pub fn analytic_analysis(
         integration: None,
         settle: None,
         solver: None,
+        contact_damping: None,
     }
 }
 

@@ -114,11 +114,13 @@ pub const BUILTINS: [Builtin; 15] = [
 ];
 
 /// `scene` starting from its unloaded contacts (`settle = false`), its blocks' strain
-/// undamped (`damping = 0`): the built-in walls and grid, run beside ntdda, which starts
-/// so and has no damping (docs/performance.md), and whose standing on flush joints the
-/// open-close iteration is tested on from that start.
+/// and its contacts undamped (`damping = 0`, `contact_damping = 0`): the built-in walls
+/// and grid, run beside ntdda, which starts so and has no damping
+/// (docs/performance.md), and whose standing on flush joints the open-close iteration
+/// is tested on from that start.
 fn unloaded(mut scene: Scene) -> Scene {
     scene.analysis.settle = Some(false);
+    scene.analysis.contact_damping = Some(0.0);
     scene.materials = undamped(scene.materials);
     scene
 }

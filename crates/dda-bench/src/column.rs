@@ -121,6 +121,7 @@ pub fn paper_analysis(
         integration: None,
         settle: Some(false),
         solver: None,
+        contact_damping: Some(0.0),
     }
 }
 

@@ -181,6 +181,7 @@ impl Masonry {
                 integration: None,
                 settle: None,
                 solver: None,
+                contact_damping: None,
             },
             materials: rock(2600.0, 1e9, 0.25),
             joints: BTreeMap::from([(

@@ -30,6 +30,10 @@ pub(crate) struct Spring {
     pub(crate) contact: u32,
     pub(crate) shear: bool,
     pub(crate) penalty: f64,
+    /// The dashpot beside the spring over the step's length, beta / dt (0 without one;
+    /// `Simulation::contact_dashpot`): the spring's force is p (q + beta / dt (q - q0)),
+    /// q0 its value at step start.
+    pub(crate) viscous: f64,
     /// The system entry coupling its two blocks, if both are free.
     pub(crate) entry: Option<Entry>,
     /// The shear spring's locked point (ratio along the edge); 0 for a normal spring.
@@ -37,6 +41,21 @@ pub(crate) struct Spring {
 }
 
 impl Spring {
+    /// The stiffness it adds to the matrix: its penalty and its dashpot's,
+    /// p (1 + beta / dt).
+    #[inline]
+    pub(crate) fn stiffness(&self) -> f64 {
+        self.penalty * (1.0 + self.viscous)
+    }
+
+    /// The coefficient of its row's coefficients in the right-hand side, for its `row`:
+    /// -p (g0 + beta / dt * driven). The dashpot acts on the change of q over the step,
+    /// c . D plus a driven block's known motion (`Row::driven`, folded into g0).
+    #[inline]
+    pub(crate) fn rhs(&self, row: &Row) -> f64 {
+        -self.penalty * (row.g0 + self.viscous * row.driven)
+    }
+
     /// Its row in the attempt whose contact rows are `rows` and whose shear rows made so
     /// far are `sheared` (see [`Simulation::spring_row`]).
     #[inline]
@@ -53,6 +72,72 @@ impl Spring {
             sheared.row(k, self.anchor, &set.contacts[k], shapes, half)
         } else {
             rows[k]
+        }
+    }
+}
+
+/// The dashpots beside the contacts' normal springs in an attempt (docs/method.md
+/// section 12): each damps its spring's vibration at its own frequency w = sqrt(p / m),
+/// m the reduced mass of the contact's two blocks (a fixed, driven or removed block
+/// counts as infinitely heavy), at the ratio `analysis.contact_damping` z, as a dashpot
+/// of coefficient beta p, beta = 2 z / w. It acts on the change of the spring's measure
+/// over the step, at its mean rate (the blocks' strain damping does so too): the
+/// spring's force is p (q + beta / dt (q - q0)). Only in the dynamic steps Shi's rule
+/// takes: static steps (and the settling) have no velocity to damp, and the
+/// average-acceleration rule of an impact resolved in time keeps its energy. Why: a
+/// block held at its friction limit on penalty springs has rocking and bouncing modes
+/// that friction feeds (a flutter), which Shi's rule damps only where its step is long
+/// against their period, so that finer steps gave worse answers.
+#[derive(Debug, Default)]
+pub(crate) struct Dashpots {
+    /// 2 z / (dt sqrt(p)): a contact's beta / dt is this times sqrt(m) (0: none).
+    scale: f64,
+    /// Each block's inverse mass, 1 / kg (0 for a fixed, driven or removed block).
+    inverse_mass: Vec<f64>,
+}
+
+impl Dashpots {
+    /// beta / dt of the dashpot beside contact `key`'s normal spring (0: none).
+    #[inline]
+    pub(crate) fn normal(&self, key: dda_contact::ContactKey) -> f64 {
+        if self.scale == 0.0 {
+            return 0.0;
+        }
+        let m_inv = self.inverse_mass[key.vertex_block as usize]
+            + self.inverse_mass[key.edge_block as usize];
+        if m_inv > 0.0 {
+            self.scale / m_inv.sqrt()
+        } else {
+            0.0
+        }
+    }
+}
+
+impl Simulation {
+    /// Sets the attempt's dashpots ([`Dashpots`]): after the base terms (the blocks'
+    /// masses) and with the step's rule known.
+    pub(crate) fn set_dashpots(&mut self) {
+        let p = &self.model.params;
+        // Under the average-acceleration rule throughout, a step taken by Shi's rule (the
+        // first, whose start accelerations are unknown) carries its end's acceleration
+        // into the next: a dashpot's force in it would push on where no dashpot acts.
+        let active = p.contact_damping > 0.0
+            && p.mode == Mode::Dynamic
+            && p.integration != Integration::AverageAcceleration
+            && self.step_rule() == StepRule::Constant;
+        let dt = self.scratch.attempt_dt;
+        let dash = &mut self.scratch.dashpots;
+        dash.scale = if active {
+            2.0 * p.contact_damping / (dt * p.normal_penalty.sqrt())
+        } else {
+            0.0
+        };
+        dash.inverse_mass.clear();
+        dash.inverse_mass.resize(self.free.len(), 0.0);
+        if active {
+            for (mass, &i) in self.scratch.mass.iter().zip(&self.free_blocks) {
+                dash.inverse_mass[i as usize] = 1.0 / mass[0][0];
+            }
         }
     }
 }
@@ -257,6 +342,7 @@ impl Simulation {
                     contact,
                     shear: false,
                     penalty: share * pn,
+                    viscous: self.scratch.dashpots.normal(c.key),
                     entry,
                     anchor: 0.0,
                 });
@@ -272,6 +358,7 @@ impl Simulation {
                             contact,
                             shear: true,
                             penalty: share * ps,
+                            viscous: 0.0,
                             entry,
                             anchor: c.locked_r,
                         });
@@ -452,7 +539,7 @@ impl Simulation {
             let row = self.spring_row(s);
             for (b, c) in row.blocks.iter().zip(&row.c) {
                 if let Some(f) = self.free[*b as usize] {
-                    self.scratch.system.add_rhs(f, -s.penalty * row.g0, c);
+                    self.scratch.system.add_rhs(f, s.rhs(&row), c);
                 }
             }
         }
@@ -483,7 +570,7 @@ impl Simulation {
                 &mut self.scratch.system,
                 &self.free,
                 s.entry,
-                s.penalty,
+                s.stiffness(),
                 &row,
             );
         }

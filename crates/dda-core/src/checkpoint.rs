@@ -32,8 +32,9 @@ pub const CHECKPOINT_MAGIC: [u8; 8] = *b"DDA-CKPT";
 /// shares of a step: a run begun before would go on under other mechanics. Version 8:
 /// the same record, under a contact law whose sliding contacts kept from locking slide
 /// back where their motion reversed, and glue whose seam ends hold past their edges'
-/// ends.
-pub const CHECKPOINT_VERSION: u32 = 8;
+/// ends. Version 9: the same record, but a scene without `analysis.contact_damping` now
+/// damps its contacts' normal springs.
+pub const CHECKPOINT_VERSION: u32 = 9;
 
 /// Length of the header before the payload.
 const HEADER_LEN: usize = 24;

@@ -100,6 +100,13 @@ pub const DAMPING: Range = Range {
     max: 1.0,
     unit: "s",
 };
+/// `analysis.contact_damping`: the damping ratio of the contact springs at their own
+/// frequencies (0: none; 1: critical; up to 10 times critical).
+pub const CONTACT_DAMPING: Range = Range {
+    min: 0.0,
+    max: 10.0,
+    unit: "",
+};
 /// `joints.*.cohesion` and `joints.*.tensile_strength`.
 pub const STRENGTH: Range = Range {
     min: 0.0,

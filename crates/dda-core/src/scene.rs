@@ -261,6 +261,13 @@ pub struct Analysis {
     /// unloaded contacts that ring; default true.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub settle: Option<bool>,
+    /// Damping ratio of every contact's normal spring at its own frequency sqrt(p / m)
+    /// (m the reduced mass of the contact's two blocks), in the dynamic steps taken by
+    /// Shi's rule: a dashpot beside each normal spring; default 0.3
+    /// (`crate::model::DEFAULT_CONTACT_DAMPING`), 0 for none (docs/method.md section
+    /// 12).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub contact_damping: Option<f64>,
     /// How the global system is solved: `direct` (a sparse Cholesky factor),
     /// `iterative` (conjugate gradients, for large scenes) or `auto` (the default:
     /// iterative from `crate::iterative::ITERATIVE_FROM_BLOCKS` free blocks).

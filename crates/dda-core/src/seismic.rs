@@ -221,10 +221,13 @@ impl Simulation {
             let row = self.spring_row(s);
             if row.driven != 0.0 {
                 let mut q = row.eval(&self.scratch.d);
+                // The dashpot's force, p beta / dt (q - q0), on the change of q over the
+                // step (zero under the average-acceleration rule).
+                let dashpot = s.viscous * (q - (row.g0 - row.driven));
                 if average {
                     q = 0.5 * (q + row.g0 - row.driven);
                 }
-                work += s.penalty * q * row.driven;
+                work += s.penalty * (q + dashpot) * row.driven;
             }
         }
         for (_, f, row) in &self.scratch.forces {

@@ -138,6 +138,8 @@ pub(crate) struct Scratch {
     /// Each block's force scale for the contact law's decisions: the magnitude of the
     /// external force on it (weight and point loads); infinite for a fixed block.
     pub(crate) force_scale: Vec<f64>,
+    /// The dashpots beside the contacts' normal springs in this attempt.
+    pub(crate) dashpots: crate::assembly::Dashpots,
     /// Why the run stopped, once it has.
     pub(crate) diagnosis: Option<Diagnosis>,
     /// Each free block's gain of kinetic energy in the step (scratch of the guard).
@@ -357,6 +359,7 @@ impl Simulation {
                 flipped_second: Vec::new(),
                 flips: Vec::new(),
                 force_scale: Vec::new(),
+                dashpots: Default::default(),
                 diagnosis: None,
                 gains: Vec::new(),
             },
@@ -575,6 +578,7 @@ impl Simulation {
             self.linearise(dt);
             self.base_terms(dt);
             self.set_force_scale();
+            self.set_dashpots();
             watch.lap(&mut rec, Phase::Assembly);
             // The first OCI iteration of every attempt factorises its own matrix (solved
             // iteratively: starts from the one the state predictor assembled, of this

@@ -31,6 +31,7 @@ fn analysis(duration: f64, dt: f64, d_max: f64, penalty: f64) -> Analysis {
         integration: None,
         settle: Some(false),
         solver: None,
+        contact_damping: None,
     }
 }
 
