@@ -294,7 +294,7 @@ fn impacts(doc: &mut String, pictures: &Path) -> Result<(), String> {
          - Without `impact_steps` the contact spans one or two steps and the impact keeps\n  \
          three quarters (collision) or half (drop) of its speed. These runs have no contact\n  \
          dashpots; a scene has them by default (`contact_damping`, 0.3), and the drop then\n  \
-         rebounds at 0.17 of its impact speed (docs/method.md section 12); with\n  \
+         rebounds at 0.22 of its impact speed (docs/method.md section 12); with\n  \
          `impact_steps` they do not act.\n\
          - Resolving it in N steps with Shi's constant-acceleration rule is not enough: the\n  \
          rule damps the contact's oscillation, and the restitution rises only slowly with N\n  \

@@ -31,8 +31,8 @@ pub(crate) struct Spring {
     pub(crate) shear: bool,
     pub(crate) penalty: f64,
     /// The dashpot beside the spring over the step's length, beta / dt (0 without one;
-    /// `Simulation::contact_dashpot`): the spring's force is p (q + beta / dt (q - q0)),
-    /// q0 its value at step start.
+    /// [`Dashpots`]): the spring's force is p (q + beta / dt (q - q_ref)), q_ref where
+    /// the dashpot measures from ([`dashpot_base`]).
     pub(crate) viscous: f64,
     /// The system entry coupling its two blocks, if both are free.
     pub(crate) entry: Option<Entry>,
@@ -49,11 +49,10 @@ impl Spring {
     }
 
     /// The coefficient of its row's coefficients in the right-hand side, for its `row`:
-    /// -p (g0 + beta / dt * driven). The dashpot acts on the change of q over the step,
-    /// c . D plus a driven block's known motion (`Row::driven`, folded into g0).
+    /// -p (g0 + beta / dt (g0 - q_ref)), the dashpot acting on q - q_ref ([`dashpot_base`]).
     #[inline]
     pub(crate) fn rhs(&self, row: &Row) -> f64 {
-        -self.penalty * (row.g0 + self.viscous * row.driven)
+        -self.penalty * (row.g0 + self.viscous * (row.g0 - dashpot_base(row)))
     }
 
     /// Its row in the attempt whose contact rows are `rows` and whose shear rows made so
@@ -81,8 +80,9 @@ impl Spring {
 /// m the reduced mass of the contact's two blocks (a fixed, driven or removed block
 /// counts as infinitely heavy), at the ratio `analysis.contact_damping` z, as a dashpot
 /// of coefficient beta p, beta = 2 z / w. It acts on the change of the spring's measure
-/// over the step, at its mean rate (the blocks' strain damping does so too): the
-/// spring's force is p (q + beta / dt (q - q0)). Only in the dynamic steps Shi's rule
+/// over the step, at its mean rate (the blocks' strain damping does so too), from where
+/// the blocks touched ([`dashpot_base`]): the spring's force is
+/// p (q + beta / dt (q - q_ref)). Only in the dynamic steps Shi's rule
 /// takes: static steps (and the settling) have no velocity to damp, and the
 /// average-acceleration rule of an impact resolved in time keeps its energy. Why: a
 /// block held at its friction limit on penalty springs has rocking and bouncing modes
@@ -140,6 +140,15 @@ impl Simulation {
             }
         }
     }
+}
+
+/// Where a spring's dashpot measures the change of its measure q from: its value at the
+/// step's start, q0 = g0 less a driven block's known motion over the step
+/// (`Row::driven`, folded into g0), or 0 where the contact was open then (q0 > 0): the
+/// blocks' approach through the gap before they touch is no motion of the spring.
+#[inline]
+pub(crate) fn dashpot_base(row: &Row) -> f64 {
+    (row.g0 - row.driven).min(0.0)
 }
 
 /// The shear rows of an attempt's contact states, by contact: each locked contact's at

@@ -223,7 +223,7 @@ impl Simulation {
                 let mut q = row.eval(&self.scratch.d);
                 // The dashpot's force, p beta / dt (q - q0), on the change of q over the
                 // step (zero under the average-acceleration rule).
-                let dashpot = s.viscous * (q - (row.g0 - row.driven));
+                let dashpot = s.viscous * (q - crate::assembly::dashpot_base(&row));
                 if average {
                     q = 0.5 * (q + row.g0 - row.driven);
                 }
