@@ -133,7 +133,7 @@ fn nth_line_of(text: &str, from: &str, n: usize) -> usize {
 #[test]
 fn every_bad_input_names_key_and_line() {
     const SLIDER: &str = "vertices = [[0.0, 1.0]";
-    let cases: [(&str, &str, &str, &str); 16] = [
+    let cases: [(&str, &str, &str, &str); 18] = [
         // (what, line to replace, replacement, expected key)
         (
             "clockwise",
@@ -207,6 +207,18 @@ fn every_bad_input_names_key_and_line() {
             "time_step",
             "time_step = 0.0",
             "analysis.time_step",
+        ),
+        (
+            "contact damping < 0",
+            "frames",
+            "frames = 2\ncontact_damping = -0.1",
+            "analysis.contact_damping",
+        ),
+        (
+            "contact damping > 10",
+            "frames",
+            "frames = 2\ncontact_damping = 11.0",
+            "analysis.contact_damping",
         ),
         (
             "blocks overlapping at the start",
