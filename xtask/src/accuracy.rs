@@ -293,9 +293,8 @@ fn impacts(doc: &mut String, pictures: &Path) -> Result<(), String> {
         "### Reading (2026-11-24; the steps a contact closes and opens in, 2026-11-25)\n\n\
          - Without `impact_steps` the contact spans one or two steps and the impact keeps\n  \
          three quarters (collision) or half (drop) of its speed. These runs have no contact\n  \
-         dashpots; a scene has them by default (`contact_damping`, 0.3), and the drop then\n  \
-         rebounds at 0.22 of its impact speed (docs/method.md section 12); with\n  \
-         `impact_steps` they do not act.\n\
+         dashpots; a scene has them by default (`contact_damping`, 0.3), but not on\n  \
+         contacts in impact, so the impacts are the same (docs/method.md section 12).\n\
          - Resolving it in N steps with Shi's constant-acceleration rule is not enough: the\n  \
          rule damps the contact's oscillation, and the restitution rises only slowly with N\n  \
          (0.78 at 10, 0.94 at 40), as a one-spring model of the rule predicts (0.79 and\n  \

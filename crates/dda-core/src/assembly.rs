@@ -75,8 +75,9 @@ impl Spring {
     }
 }
 
-/// The dashpots beside the contacts' normal springs in an attempt (docs/method.md
-/// section 12): each damps its spring's vibration at its own frequency w = sqrt(p / m),
+/// The dashpots beside the normal springs of the contacts at rest in an attempt (not in
+/// impact at its start, [`Simulation::in_impact`]; docs/method.md section 12): each
+/// damps its spring's vibration at its own frequency w = sqrt(p / m),
 /// m the reduced mass of the contact's two blocks (a fixed, driven or removed block
 /// counts as infinitely heavy), at the ratio `analysis.contact_damping` z, as a dashpot
 /// of coefficient beta p, beta = 2 z / w. It acts on the change of the spring's measure
@@ -94,13 +95,17 @@ pub(crate) struct Dashpots {
     scale: f64,
     /// Each block's inverse mass, 1 / kg (0 for a fixed, driven or removed block).
     inverse_mass: Vec<f64>,
+    /// Per contact: whether it is in impact at the step's start
+    /// ([`Simulation::in_impact`]), and so has no dashpot.
+    in_impact: Vec<bool>,
 }
 
 impl Dashpots {
-    /// beta / dt of the dashpot beside contact `key`'s normal spring (0: none).
+    /// beta / dt of the dashpot beside contact `k`'s normal spring, `key` its blocks
+    /// (0: none).
     #[inline]
-    pub(crate) fn normal(&self, key: dda_contact::ContactKey) -> f64 {
-        if self.scale == 0.0 {
+    pub(crate) fn normal(&self, k: usize, key: dda_contact::ContactKey) -> f64 {
+        if self.scale == 0.0 || self.in_impact.get(k).copied().unwrap_or(true) {
             return 0.0;
         }
         let m_inv = self.inverse_mass[key.vertex_block as usize]
@@ -134,11 +139,23 @@ impl Simulation {
         };
         dash.inverse_mass.clear();
         dash.inverse_mass.resize(self.free.len(), 0.0);
-        if active {
-            for (mass, &i) in self.scratch.mass.iter().zip(&self.free_blocks) {
-                dash.inverse_mass[i as usize] = 1.0 / mass[0][0];
+        dash.in_impact.clear();
+        if !active {
+            return;
+        }
+        for (mass, &i) in self.scratch.mass.iter().zip(&self.free_blocks) {
+            dash.inverse_mass[i as usize] = 1.0 / mass[0][0];
+        }
+        let mut in_impact = std::mem::take(&mut self.scratch.dashpots.in_impact);
+        in_impact.resize(self.state.contacts.len(), false);
+        for pc in &self.state.contacts.pairs {
+            if let Some((_, speed)) = self.impact_speed(pc.pair) {
+                for k in pc.start as usize..pc.end as usize {
+                    in_impact[k] = self.in_impact(&self.state.contacts.contacts[k], speed);
+                }
             }
         }
+        self.scratch.dashpots.in_impact = in_impact;
     }
 }
 
@@ -351,7 +368,7 @@ impl Simulation {
                     contact,
                     shear: false,
                     penalty: share * pn,
-                    viscous: self.scratch.dashpots.normal(c.key),
+                    viscous: self.scratch.dashpots.normal(k, c.key),
                     entry,
                     anchor: 0.0,
                 });

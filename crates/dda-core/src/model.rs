@@ -666,10 +666,9 @@ fn each_within(key: &str, v: &[f64], range: &Range) -> Result<(), Invalid> {
 
 /// The damping ratio of the contact springs' dashpots when `analysis.contact_damping` is
 /// not given (docs/method.md section 12). Our choice: walls and stacks at their friction
-/// limit on penalty springs, resolved in fine steps, fluttered undamped (up to 11% off
+/// limit on penalty springs, resolved in fine steps, fluttered undamped (up to 18% off
 /// the closed form) and needed 0.1 to 0.2 to slide as one body; 0.3 holds every one
-/// measured to its floor, and costs a rebound resolved by Shi's rule alone most of its
-/// speed (impacts resolved by `impact_steps` keep it).
+/// measured to its floor.
 pub const DEFAULT_CONTACT_DAMPING: f64 = 0.3;
 
 /// The validated analysis settings, in SI units and radians.

@@ -87,49 +87,22 @@ impl Simulation {
     /// The largest step `analysis.impact_steps` = N allows: for every pair of blocks in
     /// impact, a 1/N of its contact's duration pi sqrt(m / (n p)) (m the reduced mass of
     /// the two blocks, or the free block's against a fixed one; n its contacts in
-    /// impact; p the normal penalty); infinite without the key or without impacts. A
-    /// contact is in impact when its vertex approaches the edge, or leaves it while
-    /// the contact is closed, faster than 2 g sqrt(m / p): twice the speed at which a
-    /// contact set down unloaded rings under the weight it carries, so that resting
-    /// contacts do not hold the step down (docs/method.md section 12).
+    /// impact, [`Simulation::in_impact`]; p the normal penalty); infinite without the
+    /// key or without impacts (docs/method.md section 12).
     pub(crate) fn impact_room(&self) -> f64 {
         let p = &self.model.params;
         let Some(n_steps) = p.impact_steps else {
             return f64::INFINITY;
         };
-        let g = p.gravity.map_or(0.0, |g| g.length());
-        let mass = |i: usize| self.free[i].map(|_| self.block_mass(i));
         let mut room = f64::INFINITY;
         for pc in &self.state.contacts.pairs {
-            let (a, b) = (pc.pair.a as usize, pc.pair.b as usize);
-            let m = match (mass(a), mass(b)) {
-                (Some(ma), Some(mb)) => ma * mb / (ma + mb),
-                (Some(m), None) | (None, Some(m)) => m,
-                (None, None) => continue,
+            let Some((m, speed)) = self.impact_speed(pc.pair) else {
+                continue;
             };
-            let settle = 2.0 * g * (m / p.normal_penalty).sqrt();
-            let mut in_impact = 0u32;
-            for c in &self.state.contacts.contacts[pc.start as usize..pc.end as usize] {
-                if !c.active {
-                    continue;
-                }
-                let k = c.key;
-                let (vs, es) = (
-                    &self.scratch.shapes[k.vertex_block as usize],
-                    &self.scratch.shapes[k.edge_block as usize],
-                );
-                let at = vs.vertices[k.vertex as usize];
-                let t = es.tangents[k.edge as usize];
-                let normal = DVec2::new(t.y, -t.x);
-                let speed = |i: usize, shape: &dda_contact::BlockShape| {
-                    point_displacement(at, shape.centroid, &self.state.blocks[i].velocity)
-                };
-                let v_n = (speed(k.vertex_block as usize, vs) - speed(k.edge_block as usize, es))
-                    .dot(normal);
-                if v_n < -settle || (c.state.is_closed() && v_n > settle) {
-                    in_impact += 1;
-                }
-            }
+            let in_impact = self.state.contacts.contacts[pc.start as usize..pc.end as usize]
+                .iter()
+                .filter(|c| self.in_impact(c, speed))
+                .count() as u32;
             if in_impact > 0 {
                 let duration =
                     std::f64::consts::PI * (m / (f64::from(in_impact) * p.normal_penalty)).sqrt();
@@ -137,6 +110,46 @@ impl Simulation {
             }
         }
         room
+    }
+
+    /// The reduced mass m of `pair`'s blocks (the free block's against a fixed one) and
+    /// the speed past which their contacts are in impact, 2 g sqrt(m / p): twice the
+    /// speed at which a contact set down unloaded rings under the weight it carries, so
+    /// that resting contacts are not in impact (0 without gravity: every contact moving
+    /// along its normal is). None if neither block is free.
+    pub(crate) fn impact_speed(&self, pair: dda_contact::NeighbourPair) -> Option<(f64, f64)> {
+        let p = &self.model.params;
+        let g = p.gravity.map_or(0.0, |g| g.length());
+        let mass = |i: usize| self.free[i].map(|_| self.block_mass(i));
+        let m = match (mass(pair.a as usize), mass(pair.b as usize)) {
+            (Some(ma), Some(mb)) => ma * mb / (ma + mb),
+            (Some(m), None) | (None, Some(m)) => m,
+            (None, None) => return None,
+        };
+        Some((m, 2.0 * g * (m / p.normal_penalty).sqrt()))
+    }
+
+    /// Whether contact `c` is in impact at the step's start: active, and its vertex
+    /// approaching the edge, or leaving it while the contact is closed, faster than
+    /// `speed` ([`Simulation::impact_speed`]), by the blocks' velocities.
+    pub(crate) fn in_impact(&self, c: &dda_contact::Contact, speed: f64) -> bool {
+        if !c.active {
+            return false;
+        }
+        let k = c.key;
+        let (vs, es) = (
+            &self.scratch.shapes[k.vertex_block as usize],
+            &self.scratch.shapes[k.edge_block as usize],
+        );
+        let at = vs.vertices[k.vertex as usize];
+        let t = es.tangents[k.edge as usize];
+        let normal = DVec2::new(t.y, -t.x);
+        let velocity = |i: usize, shape: &dda_contact::BlockShape| {
+            point_displacement(at, shape.centroid, &self.state.blocks[i].velocity)
+        };
+        let v_n = (velocity(k.vertex_block as usize, vs) - velocity(k.edge_block as usize, es))
+            .dot(normal);
+        v_n < -speed || (c.state.is_closed() && v_n > speed)
     }
 
     /// Largest vertex displacement (first order) and largest |rotation| of the trial
