@@ -261,9 +261,9 @@ pub struct Analysis {
     /// unloaded contacts that ring; default true.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub settle: Option<bool>,
-    /// Damping ratio of every contact's normal spring at its own frequency sqrt(p / m)
-    /// (m the reduced mass of the contact's two blocks), in the dynamic steps taken by
-    /// Shi's rule: a dashpot beside each normal spring; default 0.3
+    /// Damping ratio of the normal spring of every contact at rest (not in impact) at its
+    /// own frequency sqrt(p / m) (m the reduced mass of the contact's two blocks), in the
+    /// dynamic steps taken by Shi's rule: a dashpot beside each such spring; default 0.3
     /// (`crate::model::DEFAULT_CONTACT_DAMPING`), 0 for none (docs/method.md section
     /// 12).
     #[serde(default, skip_serializing_if = "Option::is_none")]

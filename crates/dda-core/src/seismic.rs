@@ -221,8 +221,9 @@ impl Simulation {
             let row = self.spring_row(s);
             if row.driven != 0.0 {
                 let mut q = row.eval(&self.scratch.d);
-                // The dashpot's force, p beta / dt (q - q0), on the change of q over the
-                // step (zero under the average-acceleration rule).
+                // The dashpot's force, p beta / dt (q - q_ref), on the change of q over the
+                // step from where the blocks touched (no dashpot under the
+                // average-acceleration rule).
                 let dashpot = s.viscous * (q - crate::assembly::dashpot_base(&row));
                 if average {
                     q = 0.5 * (q + row.g0 - row.driven);
