@@ -7,9 +7,10 @@
 use crate::assembly::Spring;
 use crate::contact_law::{DECISION_BAND, decision_band};
 use crate::diagnosis::SimError;
+use crate::kinematics::Vec6;
 use crate::simulation::Simulation;
 use crate::solver::RankOne;
-use crate::springs::{Row, normal_row};
+use crate::springs::{HalfStep, Row, normal_row};
 use crate::state::StepRecord;
 use crate::timing::{Phase, Stopwatch};
 use dda_contact::ContactState;
@@ -83,20 +84,16 @@ impl Simulation {
         let mut watch = Stopwatch::start();
         self.scratch.flips.clear();
         let dt = self.scratch.attempt_dt;
-        self.scratch.motions.clear();
-        for (i, f) in self.free.iter().enumerate() {
-            self.scratch.d[i] = [0.0; 6];
-            if f.is_some() {
-                let v = self.state.blocks[i].velocity;
-                self.scratch.d[i] = std::array::from_fn(|k| v[k] * dt);
-            } else if let Some(u) = self.scratch.half[i].driven {
-                self.scratch.d[i][..2].copy_from_slice(&[u.x, u.y]);
-            }
-            self.scratch.motions.push(Motion::new(
-                self.scratch.shapes[i].centroid,
-                &self.scratch.d[i],
-            ));
-        }
+        let blocks = &self.state.blocks;
+        let free = |i: usize, _: u32| blocks[i].velocity.map(|v| v * dt);
+        set_motions(
+            &self.free,
+            &mut self.scratch.d,
+            &mut self.scratch.motions,
+            &self.scratch.shapes,
+            &self.scratch.half,
+            free,
+        );
         self.update_states();
         watch.lap(rec, Phase::Assembly);
     }
@@ -389,19 +386,20 @@ impl Simulation {
     /// for driven ones).
     pub(crate) fn gather_solution(&mut self) {
         let nd = self.nd;
-        self.scratch.motions.clear();
-        for (i, f) in self.free.iter().enumerate() {
-            self.scratch.d[i] = [0.0; 6];
-            if let Some(f) = f {
-                self.scratch.d[i][..nd].copy_from_slice(self.scratch.system.solution(*f));
-            } else if let Some(u) = self.scratch.half[i].driven {
-                self.scratch.d[i][..2].copy_from_slice(&[u.x, u.y]);
-            }
-            self.scratch.motions.push(Motion::new(
-                self.scratch.shapes[i].centroid,
-                &self.scratch.d[i],
-            ));
-        }
+        let system = &self.scratch.system;
+        let free = |_, f| {
+            let mut d = [0.0; 6];
+            d[..nd].copy_from_slice(system.solution(f));
+            d
+        };
+        set_motions(
+            &self.free,
+            &mut self.scratch.d,
+            &mut self.scratch.motions,
+            &self.scratch.shapes,
+            &self.scratch.half,
+            free,
+        );
     }
 
     /// Sets up the contacts made active since [`Simulation::linearise`] (by trajectory
@@ -421,5 +419,27 @@ impl Simulation {
                 self.state.contacts.contacts[k].state = ContactState::Sliding;
             }
         }
+    }
+}
+
+/// Each block's motion `d` for the attempt and its map of points `motions`: a free
+/// block's from `free(block, free index)`, a driven block's the ground's over the step,
+/// any other block's none.
+fn set_motions(
+    free_of: &[Option<u32>],
+    d: &mut [Vec6],
+    motions: &mut Vec<Motion>,
+    shapes: &[dda_contact::BlockShape],
+    half: &[HalfStep],
+    free: impl Fn(usize, u32) -> Vec6,
+) {
+    motions.clear();
+    for (i, f) in free_of.iter().enumerate() {
+        d[i] = match (f, half[i].driven) {
+            (Some(f), _) => free(i, *f),
+            (None, Some(u)) => [u.x, u.y, 0.0, 0.0, 0.0, 0.0],
+            (None, None) => [0.0; 6],
+        };
+        motions.push(Motion::new(shapes[i].centroid, &d[i]));
     }
 }
