@@ -26,7 +26,7 @@
 //! of blocks cut the iterations to a half but not the matrix products (`docs/scaling.md`).
 
 use super::BlockSystem;
-use crate::kinematics::Mat6;
+use crate::kinematics::{Mat6, Vec6};
 
 /// The outcome of an iterative solve.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -77,6 +77,7 @@ impl BlockSystem {
         if n == 0 {
             return it;
         }
+        self.seal();
         // The inverses of the diagonal blocks: the preconditioner D^-1, made again only
         // for the blocks whose diagonal changed since.
         let mut diag = std::mem::take(&mut self.diag_inverse);
@@ -188,6 +189,13 @@ impl BlockSystem {
         it
     }
 
+    /// Seals the couplings added since the matrix was cleared (see [`Couplings`]): a
+    /// product reads them sealed.
+    pub(super) fn seal(&mut self) {
+        self.couplings
+            .seal(self.nd, &self.col_start, &self.col_rows);
+    }
+
     /// Block `j`'s diagonal block of K, in full.
     fn diagonal_block(&self, j: usize) -> Mat6 {
         let (nd, e) = (self.nd, self.col_start[j]);
@@ -202,71 +210,86 @@ impl BlockSystem {
         k
     }
 
-    /// y = K x from the stored lower triangle, the rows of the two halves of the blocks
-    /// on two threads when `threads` is set; returns x . y, each half's sum added in a
-    /// fixed order. Each half's rows are summed in the same order either way, so the
-    /// result does not depend on the threads.
+    /// y = K x from the diagonal blocks and the couplings, the rows of the two halves of
+    /// the blocks on two threads when `threads` is set; returns x . y, each half's sum
+    /// added in a fixed order. Each half's rows are summed in the same order either way,
+    /// so the result does not depend on the threads.
     pub(super) fn multiply(&self, x: &[f64], y: &mut [f64]) -> f64 {
         let half = self.nb / 2;
         let (y0, y1) = y.split_at_mut(half * self.nd);
-        let run = |rows: std::ops::Range<usize>, crossing: &[(u32, u32)], out: &mut [f64]| {
-            match self.nd {
-                6 => self.product_rows::<6>(x, out, rows, crossing),
-                3 => self.product_rows::<3>(x, out, rows, crossing),
-                nd => unreachable!("blocks of {nd} unknowns"),
-            }
+        let run = |rows: std::ops::Range<usize>, out: &mut [f64]| match self.nd {
+            6 => self.product_rows::<6>(x, out, rows),
+            3 => self.product_rows::<3>(x, out, rows),
+            nd => unreachable!("blocks of {nd} unknowns"),
         };
-        let (s0, s1) = both(
-            self.threads,
-            || run(0..half, &[], y0),
-            || run(half..self.nb, &self.crossing, y1),
-        );
+        let (s0, s1) = both(self.threads, || run(0..half, y0), || run(half..self.nb, y1));
         s0 + s1
     }
 
-    /// The block rows `rows` of y = K x into `y` (those rows alone), for blocks of `ND`
-    /// unknowns: the entries of `crossing`, (entry, column) from columns before `rows`,
-    /// for their rows, then the block columns `rows`, each entry below the diagonal
-    /// serving both its block rows (both lie in `rows`, unless a row of the second half
-    /// below a column of the first: there only its transpose's share is taken). Returns
-    /// x . y over the rows, each row's share taken once its column is done (the row is
-    /// complete then).
+    /// The block rows `rows` (the first or the second half of the blocks) of y = K x into
+    /// `y` (those rows alone), for blocks of `ND` unknowns: the rank-one couplings first
+    /// (both their rows where both blocks lie in `rows`, else the one that does), then the
+    /// dense couplings from columns before `rows`, then the block columns `rows`, each
+    /// dense coupling below the diagonal serving both its block rows (both lie in `rows`,
+    /// unless a row of the second half below a column of the first: there only its
+    /// transpose's share is taken). Returns x . y over the rows, each row's share taken
+    /// once its column is done (the row is complete then).
     fn product_rows<const ND: usize>(
         &self,
         x: &[f64],
         y: &mut [f64],
         rows: std::ops::Range<usize>,
-        crossing: &[(u32, u32)],
     ) -> f64 {
         let first = rows.start;
+        let second = first > 0;
+        let cp = &self.couplings;
         y.fill(0.0);
-        // The entries from the other half first, so that each row is complete once its
-        // own column is done, and its share of x . y is taken then.
-        for &(e, jb) in crossing {
-            let (e, jb) = (e as usize, jb as usize);
-            let xj: &[f64; ND] = block(x, jb);
-            let mut yi = [0.0f64; ND];
-            let base = self.entry_col[e * ND];
-            let values = &self.values[base..base + ND * ND];
-            for q in 0..ND {
-                let col: &[f64; ND] = block(values, q);
-                for a in 0..ND {
-                    yi[a] += col[a] * xj[q];
-                }
+        let ours = |b: u32| rows.contains(&(b as usize));
+        for c in cp.within[usize::from(second)].iter().chain(&cp.across) {
+            let [a, b] = c.blocks;
+            let (xa, xb): (&[f64; ND], &[f64; ND]) = (block(x, a as usize), block(x, b as usize));
+            let (mut da, mut db) = (0.0, 0.0);
+            for k in 0..ND {
+                da += c.su[k] * xa[k];
+                db += c.v[k] * xb[k];
             }
-            add_to(y, self.col_rows[e] as usize - first, yi);
+            if ours(a) {
+                add_to(
+                    y,
+                    a as usize - first,
+                    std::array::from_fn::<f64, ND, _>(|k| c.su[k] * db),
+                );
+            }
+            if ours(b) {
+                add_to(
+                    y,
+                    b as usize - first,
+                    std::array::from_fn::<f64, ND, _>(|k| c.v[k] * da),
+                );
+            }
+        }
+        // The dense couplings from the other half, so that each row is complete once its
+        // own column is done, and its share of x . y is taken then.
+        if second {
+            for &(d, jb) in &cp.dense_across {
+                let xj: &[f64; ND] = block(x, jb as usize);
+                let values = cp.dense_block::<ND>(d as usize);
+                let mut yi = [0.0f64; ND];
+                for q in 0..ND {
+                    let col: &[f64; ND] = block(values, q);
+                    for a in 0..ND {
+                        yi[a] += col[a] * xj[q];
+                    }
+                }
+                add_to(y, cp.dense_rows[d as usize] as usize - first, yi);
+            }
         }
         let mut xy = 0.0;
-        // The iterative layout keeps the entries' values in entry order, each entry's
-        // columns together (`BlockSystem::set_pattern`): they are read in one pass, from
-        // the first entry of the first column of `rows` on, with no offsets looked up.
-        let mut off = if rows.is_empty() {
-            0
-        } else {
-            self.entry_col[self.col_start[first] * ND]
-        };
+        // The diagonal blocks are stored in block order, each one's columns together: they
+        // are read in one pass, with no offsets looked up.
+        let tri = ND * (ND + 1) / 2;
+        let mut off = first * tri;
         for jb in rows.clone() {
-            let (s, e_end) = (self.col_start[jb], self.col_start[jb + 1]);
             let xj: [f64; ND] = *block(x, jb);
             let mut yj = [0.0f64; ND];
             // The diagonal block: column q's rows q.. of the block.
@@ -279,11 +302,10 @@ impl BlockSystem {
                     yj[q] += col[a] * xj[q + a];
                 }
             }
-            for e in s + 1..e_end {
-                let ib = self.col_rows[e] as usize;
+            for d in cp.dense_start[jb] as usize..cp.dense_start[jb + 1] as usize {
+                let ib = cp.dense_rows[d] as usize;
                 let xi: &[f64; ND] = block(x, ib);
-                let values = &self.values[off..off + ND * ND];
-                off += ND * ND;
+                let values = cp.dense_block::<ND>(d);
                 if ib >= rows.end {
                     // A row of the other half: only its transpose's share is ours.
                     for q in 0..ND {
@@ -313,6 +335,150 @@ impl BlockSystem {
             xy += (0..ND).map(|q| xj[q] * row[q]).sum::<f64>();
         }
         xy
+    }
+}
+
+/// One term s u v^T of the couplings between two blocks (and its transpose): `s u`
+/// over the unknowns of the first block, `v` over those of the second (positions in the
+/// pattern's order).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Coupling {
+    blocks: [u32; 2],
+    su: Vec6,
+    v: Vec6,
+}
+
+/// The couplings between blocks of a system solved iteratively: every term s u v^T
+/// added off the diagonal (a contact's spring, a bolt), kept as it came until the solve
+/// seals them. Sealed, the terms of a pair of blocks with at least nd / 2 of them (as many
+/// values as a dense nd x nd block, or more) are summed into a dense block; the others
+/// stay rank-one terms. A product with a rank-one term reads its 2 nd values and takes
+/// 4 nd multiply-adds, with a dense block nd^2 values and 2 nd^2: between blocks of
+/// frictionless contacts, which carry two springs (one at each vertex of their shared
+/// edge) or none (a pair of the pattern not in contact), a product reads half the
+/// values a dense block for every pair of the pattern took. Terms added after the seal
+/// (the open-close iteration's changed springs) stay rank-one terms.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Couplings {
+    /// The first block of the second half.
+    half: u32,
+    /// Terms added since the last reset, with their entries of the pattern, until sealed.
+    pending: Vec<(u32, Coupling)>,
+    sealed: bool,
+    /// Per entry of the pattern: its terms, then its dense block (`u32::MAX`: none).
+    count: Vec<u32>,
+    /// The rank-one terms with both blocks in the first half, both in the second; and
+    /// those with one in each.
+    within: [Vec<Coupling>; 2],
+    across: Vec<Coupling>,
+    /// The dense blocks: per block (the earlier of the pair) the range of `dense_rows`
+    /// of its dense blocks, and each one's later block; values `nd x nd` a block, its
+    /// columns (over the earlier block's unknowns) together.
+    dense_start: Vec<u32>,
+    dense_rows: Vec<u32>,
+    dense_values: Vec<f64>,
+    /// The dense blocks whose earlier block lies in the first half and later in the
+    /// second, with their earlier blocks: the second half's rows of a product read them.
+    dense_across: Vec<(u32, u32)>,
+}
+
+impl Couplings {
+    /// Empties the couplings of a pattern of `entries` entries, whose second half of the
+    /// blocks starts at `half`.
+    pub(crate) fn reset(&mut self, entries: usize, half: usize) {
+        self.half = half as u32;
+        self.pending.clear();
+        self.sealed = false;
+        self.count.clear();
+        self.count.resize(entries, 0);
+        self.within.iter_mut().for_each(Vec::clear);
+        self.across.clear();
+        self.dense_start.clear();
+        self.dense_rows.clear();
+        self.dense_values.clear();
+        self.dense_across.clear();
+    }
+
+    /// Adds `s u v^T` between blocks `blocks` (positions: `u` over the first's unknowns,
+    /// `v` over the second's), of entry `entry` of the pattern.
+    pub(crate) fn add(&mut self, entry: usize, blocks: [u32; 2], s: f64, u: &Vec6, v: &Vec6) {
+        let c = Coupling {
+            blocks,
+            su: u.map(|x| s * x),
+            v: *v,
+        };
+        if self.sealed {
+            self.keep(c);
+        } else {
+            self.pending.push((entry as u32, c));
+        }
+    }
+
+    /// Keeps `c` as a rank-one term.
+    fn keep(&mut self, c: Coupling) {
+        let [a, b] = c.blocks.map(|b| b >= self.half);
+        match (a, b) {
+            (false, false) => self.within[0].push(c),
+            (true, true) => self.within[1].push(c),
+            _ => self.across.push(c),
+        }
+    }
+
+    /// Dense block `d`'s values.
+    fn dense_block<const ND: usize>(&self, d: usize) -> &[f64] {
+        &self.dense_values[d * ND * ND..(d + 1) * ND * ND]
+    }
+
+    /// Seals the terms added since the last reset (see [`Couplings`]), in the order they
+    /// were added, for blocks of `nd` unknowns and the pattern's block columns
+    /// (`col_start`, `col_rows`: each column's diagonal entry, then its later blocks).
+    pub(crate) fn seal(&mut self, nd: usize, col_start: &[usize], col_rows: &[u32]) {
+        if self.sealed {
+            return;
+        }
+        self.sealed = true;
+        for &(e, _) in &self.pending {
+            self.count[e as usize] += 1;
+        }
+        let dense_from = nd.div_ceil(2) as u32;
+        let nb = col_start.len() - 1;
+        self.dense_start.push(0);
+        for jb in 0..nb {
+            for e in col_start[jb] + 1..col_start[jb + 1] {
+                if self.count[e] < dense_from {
+                    self.count[e] = u32::MAX;
+                    continue;
+                }
+                let (d, ib) = (self.dense_rows.len() as u32, col_rows[e]);
+                self.count[e] = d;
+                self.dense_rows.push(ib);
+                if (jb as u32) < self.half && ib >= self.half {
+                    self.dense_across.push((d, jb as u32));
+                }
+            }
+            self.dense_start.push(self.dense_rows.len() as u32);
+        }
+        self.dense_values
+            .resize(self.dense_rows.len() * nd * nd, 0.0);
+        let pending = std::mem::take(&mut self.pending);
+        for &(e, c) in &pending {
+            let d = self.count[e as usize];
+            if d == u32::MAX {
+                self.keep(c);
+                continue;
+            }
+            // Stored: rows of the later block, columns of the earlier.
+            let [a, b] = c.blocks;
+            let (rows, cols) = if a > b { (&c.su, &c.v) } else { (&c.v, &c.su) };
+            let values = &mut self.dense_values[d as usize * nd * nd..(d as usize + 1) * nd * nd];
+            for q in 0..nd {
+                for r in 0..nd {
+                    values[q * nd + r] += rows[r] * cols[q];
+                }
+            }
+        }
+        self.pending = pending;
+        self.pending.clear();
     }
 }
 
@@ -619,6 +785,7 @@ mod tests {
                 }
                 let ux: f64 = u.iter().zip(&x).map(|(a, b)| a * b).sum();
                 let mut before = vec![0.0; n];
+                sys.seal();
                 sys.multiply(&x, &mut before);
                 sys.add_rank_one(&t);
                 let mut after = vec![0.0; n];
@@ -633,6 +800,97 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    /// A product with K equals the dense matrix's, whatever the couplings' form: pairs of
+    /// blocks with one to four terms (kept rank-one below nd / 2 terms, summed into a
+    /// dense block from there), pairs within either half of the blocks and across them,
+    /// and terms added after the seal; the same bits on one thread and two. Fails when a
+    /// dense block's orientation, a half's share of a term across the halves, or the
+    /// count that decides the form is wrong.
+    #[test]
+    fn a_product_with_the_couplings_is_the_dense_matrix_s() {
+        for nd in [3usize, 6] {
+            let nb = 10;
+            let pairs: Vec<(u32, u32)> = vec![
+                (0, 1),
+                (0, 7),
+                (1, 2),
+                (2, 6),
+                (3, 4),
+                (4, 9),
+                (5, 6),
+                (6, 8),
+                (7, 8),
+            ];
+            let mut sys = BlockSystem::iterative();
+            sys.set_pattern(nb, nd, &pairs).unwrap();
+            sys.clear();
+            let n = nb * nd;
+            let mut dense = vec![vec![0.0; n]; n];
+            let mut rnd = rng(5);
+            let mut term = |sys: &mut BlockSystem, dense: &mut Vec<Vec<f64>>, i: u32, j: u32| {
+                let u: Vec6 = std::array::from_fn(|k| if k < nd { rnd() } else { 0.0 });
+                let v: Vec6 = std::array::from_fn(|k| if k < nd { rnd() } else { 0.0 });
+                let s = 1.0 + rnd();
+                sys.add_outer(sys.entry(i, j).unwrap(), i, j, s, &u, &v);
+                let (i, j) = (i as usize, j as usize);
+                for a in 0..nd {
+                    for c in 0..nd {
+                        dense[i * nd + a][j * nd + c] += s * u[a] * v[c];
+                        dense[j * nd + c][i * nd + a] += s * u[a] * v[c];
+                    }
+                }
+            };
+            for i in 0..nb as u32 {
+                let k: Mat6 = std::array::from_fn(|a| {
+                    std::array::from_fn(|c| if a == c { 5.0 } else { 0.1 })
+                });
+                sys.add_diagonal(i, &k);
+                for a in 0..nd {
+                    for c in 0..nd {
+                        dense[i as usize * nd + a][i as usize * nd + c] += k[a][c];
+                    }
+                }
+            }
+            // Pair k gets k % 4 + 1 terms, in either order of its blocks.
+            for (k, &(i, j)) in pairs.iter().enumerate() {
+                for t in 0..=k % 4 {
+                    let (a, b) = if t % 2 == 0 { (i, j) } else { (j, i) };
+                    term(&mut sys, &mut dense, a, b);
+                }
+            }
+            sys.seal();
+            let dense_pairs = sys.couplings.dense_rows.len();
+            let expect = (0..pairs.len())
+                .filter(|k| k % 4 + 1 >= nd.div_ceil(2))
+                .count();
+            assert_eq!(dense_pairs, expect, "nd {nd}: dense blocks");
+            term(&mut sys, &mut dense, 7, 0);
+            term(&mut sys, &mut dense, 4, 9);
+            let x: Vec<f64> = (0..n).map(|_| rnd()).collect();
+            let mut y1 = vec![0.0; n];
+            sys.threads = false;
+            let xy1 = sys.multiply(&x, &mut y1);
+            let mut y2 = vec![0.0; n];
+            sys.threads = true;
+            let xy2 = sys.multiply(&x, &mut y2);
+            assert_eq!(
+                (y1.clone(), xy1.to_bits()),
+                (y2, xy2.to_bits()),
+                "nd {nd}: threads"
+            );
+            for r in 0..n {
+                let want: f64 = (0..n).map(|c| dense[r][c] * x[c]).sum();
+                assert!(
+                    (y1[r] - want).abs() <= 1e-12 * (1.0 + want.abs()),
+                    "nd {nd}, row {r}: {} against {want}",
+                    y1[r]
+                );
+            }
+            let want: f64 = (0..n).map(|r| x[r] * y1[r]).sum();
+            assert!((xy1 - want).abs() <= 1e-12 * (1.0 + want.abs()));
         }
     }
 

@@ -179,10 +179,9 @@ pub struct BlockSystem {
     pub(super) diag_inverse: Vec<iterative::Packed>,
     pub(super) metric: Vec<iterative::Packed>,
     pub(super) work: Vec<f64>,
-    /// The iterative layout's entries below the diagonal whose block column lies in the
-    /// first half of the blocks and block row in the second, with their columns: the
-    /// second half's rows of a product read them (`BlockSystem::multiply`).
-    pub(super) crossing: Vec<(u32, u32)>,
+    /// The iterative layout's couplings between blocks (`iterative::Couplings`): the
+    /// off-diagonal terms, kept as rank-one terms or dense blocks, pair by pair.
+    pub(super) couplings: iterative::Couplings,
     /// Per block (in the pattern's order): whether its diagonal block changed since the
     /// iterative solve last inverted it (cleared and refilled, or a term added).
     pub(super) stale: Vec<bool>,
@@ -239,7 +238,7 @@ impl Default for BlockSystem {
             diag_inverse: Vec::new(),
             metric: Vec::new(),
             work: Vec::new(),
-            crossing: Vec::new(),
+            couplings: iterative::Couplings::default(),
             stale: Vec::new(),
         }
     }
@@ -333,25 +332,20 @@ impl BlockSystem {
         self.entry_col.clear();
         self.entry_col.resize(self.col_rows.len() * nd, 0);
         if self.iterative {
-            // No factorisation reads the values: each block entry's columns lie together
-            // (the diagonal's lower triangle, an off-diagonal's nd x nd), in the order of
-            // the products with K, so that they stream from memory in one pass.
+            // No factorisation reads the values: they hold the diagonal blocks alone (each
+            // one's lower triangle, its columns together, in block order, so that they
+            // stream from memory in one pass); the couplings between blocks are kept
+            // apart (`iterative::Couplings`).
             let mut off = 0;
             for e in 0..self.col_rows.len() {
                 for q in 0..nd {
                     self.entry_col[e * nd + q] = off;
-                    off += if self.entry_diag[e] { nd - q } else { nd };
-                }
-            }
-            let half = nb / 2;
-            self.crossing.clear();
-            for jb in 0..half {
-                for e in self.col_start[jb] + 1..self.col_start[jb + 1] {
-                    if self.col_rows[e] as usize >= half {
-                        self.crossing.push((e as u32, jb as u32));
+                    if self.entry_diag[e] {
+                        off += nd - q;
                     }
                 }
             }
+            self.couplings.reset(self.col_rows.len(), nb / 2);
             self.values.clear();
             self.values.resize(off, 0.0);
             self.has_pattern = true;
@@ -481,6 +475,9 @@ impl BlockSystem {
         self.stale.fill(true);
         self.values.fill(0.0);
         self.rhs.fill(0.0);
+        if self.iterative {
+            self.couplings.reset(self.col_rows.len(), self.nb / 2);
+        }
     }
 
     /// The work done so far.
@@ -540,6 +537,11 @@ impl BlockSystem {
                     *val += u[q + a] * sv;
                 }
             }
+            return;
+        }
+        if self.iterative {
+            let (a, b) = (self.pos[i as usize], self.pos[j as usize]);
+            self.couplings.add(e, [a, b], s, u, v);
             return;
         }
         // Stored block: rows of the later block in the order, columns of the earlier.
