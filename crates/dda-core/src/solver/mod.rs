@@ -32,6 +32,7 @@ mod factor;
 mod iterative;
 mod low_rank;
 mod sweeps;
+mod team;
 
 /// Columns of the low-rank path's buffer counted in the memory estimate: the engine
 /// keeps at most about this many rank-one terms (its bound on springs changed since a
