@@ -400,29 +400,32 @@ impl ProductView<'_> {
         let second = first > 0;
         let cp = self.couplings;
         y.fill(0.0);
-        let ours = |b: u32| rows.contains(&(b as usize));
-        for c in cp.within[usize::from(second)].iter().chain(&cp.across) {
-            let [a, b] = c.blocks;
-            let (xa, xb): (&[f64; ND], &[f64; ND]) =
-                (self.at(x, a as usize), self.at(x, b as usize));
+        // A rank-one term's products with the x of its two blocks.
+        let dots = |c: &Coupling, xa: &[f64; ND], xb: &[f64; ND]| {
             let (mut da, mut db) = (0.0, 0.0);
             for k in 0..ND {
                 da += c.su[k] * xa[k];
                 db += c.v[k] * xb[k];
             }
-            if ours(a) {
-                add_to(
-                    y,
-                    a as usize - first,
-                    std::array::from_fn::<f64, ND, _>(|k| c.su[k] * db),
-                );
-            }
-            if ours(b) {
-                add_to(
-                    y,
-                    b as usize - first,
-                    std::array::from_fn::<f64, ND, _>(|k| c.v[k] * da),
-                );
+            (da, db)
+        };
+        let scaled = |w: &Vec6, s: f64| std::array::from_fn::<f64, ND, _>(|k| w[k] * s);
+        // The terms within this half: both rows ours, both blocks in this half's x.
+        let own = x[usize::from(second)];
+        for c in &cp.within[usize::from(second)] {
+            let [a, b] = c.blocks.map(|b| b as usize - first);
+            let (da, db) = dots(c, block(own, a), block(own, b));
+            add_to(y, a, scaled(&c.su, db));
+            add_to(y, b, scaled(&c.v, da));
+        }
+        // The terms across the halves: one row ours.
+        for c in &cp.across {
+            let [a, b] = c.blocks.map(|b| b as usize);
+            let (da, db) = dots(c, self.at(x, a), self.at(x, b));
+            if rows.contains(&a) {
+                add_to(y, a - first, scaled(&c.su, db));
+            } else {
+                add_to(y, b - first, scaled(&c.v, da));
             }
         }
         // The dense couplings from the other half, so that each row is complete once its
