@@ -761,7 +761,7 @@ pub(crate) fn chol_solve(l: &Mat6, nd: usize, x: &mut [f64]) {
 
 #[cfg(test)]
 mod tests {
-    use super::super::tests::rng;
+    use super::super::tests::{in_pool_of_two, rng};
     use super::*;
     use crate::kinematics::Vec6;
 
@@ -866,17 +866,7 @@ mod tests {
                 .collect();
             (out.iterations, x)
         };
-        // In a pool of two threads, so that the second half runs on a helper thread
-        // whatever the machine's cores.
-        #[cfg(feature = "rayon")]
-        let two = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .expect("a pool of two threads")
-            .install(|| solve(true));
-        #[cfg(not(feature = "rayon"))]
-        let two = solve(true);
-        assert_eq!(two, solve(false));
+        assert_eq!(in_pool_of_two(|| solve(true)), solve(false));
     }
 
     /// A spring added to the assembled matrix (`BlockSystem::add_rank_one`) changes its

@@ -602,6 +602,20 @@ fn transpose_pattern(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> (Vec<usi
 mod tests {
     use super::*;
 
+    /// Runs `f` in a pool of two threads, so that an iterative solve's second half runs
+    /// on a helper thread whatever the machine's cores (without the `rayon` feature,
+    /// here: a solve then works both halves itself).
+    pub(super) fn in_pool_of_two<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+        #[cfg(feature = "rayon")]
+        return rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .expect("a pool of two threads")
+            .install(f);
+        #[cfg(not(feature = "rayon"))]
+        f()
+    }
+
     /// A 4-block system (a star around block 0, which the ordering moves last) solved by
     /// the block system has a dense residual at rounding level.
     /// A pseudo-random generator for test values in [-0.5, 0.5).

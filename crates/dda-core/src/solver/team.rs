@@ -231,6 +231,7 @@ fn wait_until(ready: impl Fn() -> bool) {
 
 #[cfg(test)]
 mod tests {
+    use super::super::tests::in_pool_of_two;
     use super::*;
 
     /// A team's sums are the first half's plus the second's, on one thread or two; and a
@@ -251,27 +252,20 @@ mod tests {
             seen
         };
         let want: Vec<f64> = (0..50).map(|k| 0.5 + 2.0 * k as f64).collect();
-        #[cfg(feature = "rayon")]
-        let two = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .expect("a pool of two threads")
-            .install(|| {
-                let ended = std::panic::catch_unwind(|| {
-                    with_team(
-                        true,
-                        |_| 0.0,
-                        |team| {
-                            team.run(Phase::Product, |_| 0.0);
-                            panic!("the body fails");
-                        },
-                    )
-                });
-                assert!(ended.is_err());
-                sums(true)
+        let two = in_pool_of_two(|| {
+            let ended = std::panic::catch_unwind(|| {
+                with_team(
+                    true,
+                    |_| 0.0,
+                    |team| {
+                        team.run(Phase::Product, |_| 0.0);
+                        panic!("the body fails");
+                    },
+                )
             });
-        #[cfg(not(feature = "rayon"))]
-        let two = sums(true);
+            assert!(ended.is_err());
+            sums(true)
+        });
         assert_eq!(two, want);
         assert_eq!(sums(false), want);
     }
