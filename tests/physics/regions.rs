@@ -462,6 +462,33 @@ fn a_pit_wall_with_bolts_a_toe_cut_and_a_quake_runs_under_the_guard() {
     assert!(tension > 0.0, "the first bolt's tension {tension} N");
 }
 
+/// `tests/scenes/soft-layer.toml`: a soft jointed layer over hard jointed rock, settled,
+/// takes its steps at the dt asked for: 50 steps of 1 ms, none cut, under the physics
+/// guard. Settled, it moves little in a step (its contacts loaded, no block near d_max),
+/// so only an open-close iteration that does not converge could cut a step. Before a
+/// contact that kept turning its friction locked (`contact_law::FREEZE_LIMIT`) and an
+/// attempt whose contacts with friction still changed could go past `max_oci`
+/// (`open_close::OCI_GRACE`), it took 102 steps, 13 of them cut.
+#[test]
+fn a_soft_layer_on_hard_rock_keeps_its_time_step() {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes/soft-layer.toml");
+    let (_, model) = Scene::load(&path).unwrap();
+    let (dt0, duration) = (model.params.dt0, model.params.duration);
+    let options = RunOptions {
+        stop_on_violation: true,
+        ..RunOptions::default()
+    };
+    let mut sim = Simulation::new(model, options);
+    let mut cuts = 0;
+    sim.run(|_, rec| cuts += rec.cuts)
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert!(sim.finished());
+    let steps = sim.totals().steps;
+    assert_eq!(cuts, 0, "{steps} steps");
+    assert_eq!(steps, (duration / dt0).round() as u64);
+}
+
 /// Every scene of `examples/` runs to its end as written, with the physics guard on: no
 /// energy created beyond 1% of its reference, no penetration beyond d_tol.
 #[test]

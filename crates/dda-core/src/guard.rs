@@ -100,7 +100,40 @@ pub fn strain(area: f64, s: &[f64; 3], young: f64, poisson: f64) -> f64 {
     0.5 * area * (s[0] * ex + s[1] * ey + s[2] * g)
 }
 
+/// What the physics guard found on a trial solution ([`Simulation::check_physics`]).
+pub(crate) struct Checked {
+    /// The checks it broke: kind ("penetration" or "energy"), what happened in words,
+    /// the blocks involved, and the worst value (m, or a share of the reference).
+    broken: Vec<(&'static str, String, Vec<String>, f64)>,
+    /// The energy supplied up to the end of the step, J/m.
+    supplied: f64,
+    /// The energy created over the reference (negative: none).
+    ratio: f64,
+}
+
+impl Checked {
+    /// Whether the trial broke physics.
+    pub(crate) fn broken(&self) -> bool {
+        !self.broken.is_empty()
+    }
+}
+
 impl Simulation {
+    /// The deepest closed contact of the trial solution: its penetration (0 if none
+    /// penetrates) and its index.
+    pub(crate) fn deepest_contact(&self) -> (f64, Option<usize>) {
+        let (mut max_pen, mut deepest) = (0.0f64, None);
+        for (k, c) in self.state.contacts.contacts.iter().enumerate() {
+            if c.active && c.state.is_closed() {
+                let pen = -self.scratch.rows[k].eval(&self.scratch.d);
+                if pen > max_pen {
+                    (max_pen, deepest) = (pen, Some(k));
+                }
+            }
+        }
+        (max_pen, deepest)
+    }
+
     /// The physics guard (see `guard`) on the trial solution of a step of `dt` whose
     /// deepest closed contact is `deepest`, `max_pen` deep: a violation stops the run
     /// before the step is committed, or is recorded, as the run's options say. Reads
@@ -111,6 +144,49 @@ impl Simulation {
         max_pen: f64,
         deepest: Option<usize>,
     ) -> Result<(), SimError> {
+        let Checked {
+            broken,
+            supplied,
+            ratio,
+        } = self.check_physics(dt, max_pen, deepest);
+        if let Some((_, what, blocks, _)) = broken.first()
+            && self.options.stop_on_violation
+        {
+            return Err(SimError::BrokenPhysics {
+                t: self.state.t,
+                what: what.clone(),
+                blocks: blocks.clone(),
+            });
+        }
+        for (kind, what, _, worst) in broken {
+            match self.state.violations.iter_mut().find(|v| v.kind == kind) {
+                Some(v) => {
+                    v.steps += 1;
+                    v.worst = v.worst.max(worst);
+                }
+                None => self.state.violations.push(Violation {
+                    kind: kind.to_string(),
+                    first: what,
+                    first_t: self.state.t,
+                    steps: 1,
+                    worst,
+                }),
+            }
+        }
+        self.state.energy.supplied = supplied;
+        self.state.energy.supplied_max = self.state.energy.supplied_max.max(supplied);
+        self.state.energy.worst_ratio = self.state.energy.worst_ratio.max(ratio);
+        Ok(())
+    }
+
+    /// The guard's checks on the trial solution of a step of `dt` (see
+    /// [`Simulation::guard`]), with no effect on the run.
+    pub(crate) fn check_physics(
+        &mut self,
+        dt: f64,
+        max_pen: f64,
+        deepest: Option<usize>,
+    ) -> Checked {
         let p = &self.model.params;
         let dynamic = p.mode == Mode::Dynamic;
         let gravity = self.gravity();
@@ -196,34 +272,11 @@ impl Simulation {
             broken.push(("energy", what, blocks, ratio));
         }
         self.scratch.gains = gains;
-        if let Some((_, what, blocks, _)) = broken.first()
-            && self.options.stop_on_violation
-        {
-            return Err(SimError::BrokenPhysics {
-                t: self.state.t,
-                what: what.clone(),
-                blocks: blocks.clone(),
-            });
+        Checked {
+            broken,
+            supplied,
+            ratio,
         }
-        for (kind, what, _, worst) in broken {
-            match self.state.violations.iter_mut().find(|v| v.kind == kind) {
-                Some(v) => {
-                    v.steps += 1;
-                    v.worst = v.worst.max(worst);
-                }
-                None => self.state.violations.push(Violation {
-                    kind: kind.to_string(),
-                    first: what,
-                    first_t: self.state.t,
-                    steps: 1,
-                    worst,
-                }),
-            }
-        }
-        self.state.energy.supplied = supplied;
-        self.state.energy.supplied_max = self.state.energy.supplied_max.max(supplied);
-        self.state.energy.worst_ratio = self.state.energy.worst_ratio.max(ratio);
-        Ok(())
     }
 }
 

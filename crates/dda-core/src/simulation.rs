@@ -133,6 +133,8 @@ pub(crate) struct Scratch {
     /// Those of the second half of a contact list decided in two halves
     /// (`Simulation::update_states`), before they join `flipped`.
     pub(crate) flipped_second: Vec<u32>,
+    /// Contacts of `flipped` whose joint has no friction (no shear).
+    pub(crate) frictionless_changes: usize,
     /// Changes of state of each contact in this attempt's open-close iteration.
     pub(crate) flips: Vec<u8>,
     /// Each block's force scale for the contact law's decisions: the magnitude of the
@@ -357,6 +359,7 @@ impl Simulation {
                 iteration_ready: false,
                 flipped: Vec::new(),
                 flipped_second: Vec::new(),
+                frictionless_changes: 0,
                 flips: Vec::new(),
                 force_scale: Vec::new(),
                 dashpots: Default::default(),
@@ -591,7 +594,17 @@ impl Simulation {
             let (converged, iterations, for_forces) = self.open_close_iteration(&mut rec)?;
             self.state.totals.oci_iterations += iterations as u64;
             let reason;
-            if converged {
+            // An attempt that went past `max_oci` (`OCI_GRACE`) is kept only where its
+            // result keeps the physics guard; otherwise it is cut as one that did not
+            // converge.
+            let graced_badly = converged && iterations > max_oci && {
+                let (max_pen, deepest) = self.deepest_contact();
+                self.check_physics(dt, max_pen, deepest).broken()
+            };
+            if graced_badly {
+                dt /= 3.0;
+                reason = "open-close iteration past max_oci broke physics";
+            } else if converged {
                 let (disp, rot, moved_most) = self.largest_motion();
                 *worst = moved_most;
                 if disp <= d_max && rot <= theta_max {

@@ -16,15 +16,7 @@ impl Simulation {
     /// Commits the trial solution: moves blocks, updates stresses and velocities, and
     /// records penetration.
     pub(crate) fn accept(&mut self, dt: f64, rec: &mut StepRecord) -> Result<(), SimError> {
-        let (mut max_pen, mut deepest) = (0.0f64, None);
-        for (k, c) in self.state.contacts.contacts.iter().enumerate() {
-            if c.active && c.state.is_closed() {
-                let pen = -self.scratch.rows[k].eval(&self.scratch.d);
-                if pen > max_pen {
-                    (max_pen, deepest) = (pen, Some(k));
-                }
-            }
-        }
+        let (max_pen, deepest) = self.deepest_contact();
         self.guard(dt, max_pen, deepest)?;
         rec.max_penetration = max_pen;
         rec.dt = dt;
