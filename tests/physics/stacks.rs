@@ -729,9 +729,13 @@ fn structures_past_their_tipping_limit_part() {
 /// (docs/method.md section 12), is damped by the dashpots beside the contacts' normal
 /// springs (`analysis.contact_damping`, 0.3 by default), and they slide as one body:
 /// every block within 1% of the closed form. Without the dashpots (`contact_damping =
-/// 0`) the same walls part by more than 2% (Shi's rule damps those modes only where the
-/// step is long against their period). Measured: 0.15%, 0.003% and 0.16% with the
-/// dashpots, 16%, 6.2% and 11% without.
+/// 0`) the first two walls part by more than 2% (Shi's rule damps those modes only
+/// where the step is long against their period). Measured: 0.15%, 0.003% and 0.16%
+/// with the dashpots, 16% and 6.2% without. The third parted by 11% without them until
+/// the settling's static steps stopped counting stick and slip as hard (docs/method.md
+/// section 7, 2026-11-26): settled in 21 static steps instead of 29, it starts loaded so
+/// that it slides as one body, one open-close iteration a step, and holds to 0.04%
+/// without the dashpots as with them.
 #[test]
 fn walls_at_their_friction_limit_do_not_flutter_at_fine_steps() {
     let masons = |w, h, penalty, dt, rows, per_row, slope, phi| Drawn {
@@ -746,14 +750,19 @@ fn walls_at_their_friction_limit_do_not_flutter_at_fine_steps() {
         slope,
         phi,
     };
-    for s in [
-        masons(1.0, 0.5, 1e9, 2e-4, 2, 3, 43.0, 40.0),
-        masons(1.0, 0.3, 1e10, 1e-4, 5, 5, 40.0, 35.0),
-        masons(1.5, 0.4, 1e9, 2e-4, 3, 3, 53.0, 50.0),
+    for (s, flutters) in [
+        (masons(1.0, 0.5, 1e9, 2e-4, 2, 3, 43.0, 40.0), true),
+        (masons(1.0, 0.3, 1e10, 1e-4, 5, 5, 40.0, 35.0), true),
+        (masons(1.5, 0.4, 1e9, 2e-4, 3, 3, 53.0, 50.0), false),
     ] {
         let (damped, undamped) = (s.worst(""), s.worst("contact_damping = 0"));
+        let without = if flutters {
+            undamped > 0.02
+        } else {
+            undamped < 0.01
+        };
         assert!(
-            damped < 0.01 && undamped > 0.02,
+            damped < 0.01 && without,
             "{s:?}: {damped} with the dashpots, {undamped} without"
         );
     }

@@ -322,6 +322,7 @@ impl Simulation {
         let run =
             |first: usize, contacts: &mut [Contact], flips: &mut [u8], flipped: &mut Vec<u32>| {
                 let mut frictionless = 0;
+                let mut opened_or_closed = 0;
                 for (i, slot) in contacts.iter_mut().enumerate() {
                     let (k, c) = (first + i, *slot);
                     if !c.active {
@@ -361,11 +362,14 @@ impl Simulation {
                         if !joint.has_shear() {
                             frictionless += 1;
                         }
+                        if n.state.is_closed() != c.state.is_closed() {
+                            opened_or_closed += 1;
+                        }
                         flipped.push(k as u32);
                     }
                     *slot = n;
                 }
-                frictionless
+                [frictionless, opened_or_closed]
             };
         let contacts = &mut self.state.contacts.contacts;
         // The flip counts are kept in the open-close iteration only (not the predictor).
@@ -385,10 +389,13 @@ impl Simulation {
             second.clear();
             let (a, b) = rayon::join(|| run(0, c0, f0, flipped), || run(mid, c1, f1, second));
             flipped.extend_from_slice(second);
-            sc.frictionless_changes = a + b;
+            sc.frictionless_changes = a[0] + b[0];
+            sc.opened_or_closed = a[1] + b[1];
             return flipped.len();
         }
-        sc.frictionless_changes = run(0, contacts, flips, flipped);
+        let [frictionless, opened_or_closed] = run(0, contacts, flips, flipped);
+        sc.frictionless_changes = frictionless;
+        sc.opened_or_closed = opened_or_closed;
         flipped.len()
     }
 }

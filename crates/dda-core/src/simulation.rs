@@ -135,6 +135,8 @@ pub(crate) struct Scratch {
     pub(crate) flipped_second: Vec<u32>,
     /// Contacts of `flipped` whose joint has no friction (no shear).
     pub(crate) frictionless_changes: usize,
+    /// Contacts of `flipped` that opened or closed.
+    pub(crate) opened_or_closed: usize,
     /// Changes of state of each contact in this attempt's open-close iteration.
     pub(crate) flips: Vec<u8>,
     /// Each block's force scale for the contact law's decisions: the magnitude of the
@@ -360,6 +362,7 @@ impl Simulation {
                 flipped: Vec::new(),
                 flipped_second: Vec::new(),
                 frictionless_changes: 0,
+                opened_or_closed: 0,
                 flips: Vec::new(),
                 force_scale: Vec::new(),
                 dashpots: Default::default(),
@@ -591,7 +594,7 @@ impl Simulation {
                 self.predict_states(&mut rec)?;
                 first_attempt = false;
             }
-            let (converged, iterations, for_forces) = self.open_close_iteration(&mut rec)?;
+            let (converged, iterations, not_hard) = self.open_close_iteration(&mut rec)?;
             self.state.totals.oci_iterations += iterations as u64;
             let reason;
             // An attempt that went past `max_oci` (`OCI_GRACE`) is kept only where its
@@ -609,8 +612,9 @@ impl Simulation {
                 *worst = moved_most;
                 if disp <= d_max && rot <= theta_max {
                     rec.oci = iterations;
-                    // Iterations that changed no state are no sign of a hard step.
-                    let decided = iterations - for_forces;
+                    // Iterations that changed no state (or, static, only stick and slip)
+                    // are no sign of a hard step.
+                    let decided = iterations - not_hard;
                     let growth = step_growth(decided, max_oci, disp, rot, d_max, theta_max);
                     self.accept(dt, &mut rec)?;
                     if landing {
