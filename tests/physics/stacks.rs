@@ -732,7 +732,7 @@ fn structures_past_their_tipping_limit_part() {
 /// 0`) the first two walls part by more than 2% (Shi's rule damps those modes only
 /// where the step is long against their period). Measured: 0.15%, 0.003% and 0.16%
 /// with the dashpots, 16% and 6.2% without. The third parted by 11% without them until
-/// the settling's static steps stopped counting stick and slip as hard (docs/method.md
+/// iterations that changed only stick and slip stopped counting as hard (docs/method.md
 /// section 7, 2026-11-26): settled in 21 static steps instead of 29, it starts loaded so
 /// that it slides as one body, one open-close iteration a step, and holds to 0.04%
 /// without the dashpots as with them.

@@ -134,15 +134,14 @@ impl Simulation {
     /// Open-close iteration at step size `dt` (base terms already built). Returns whether
     /// it converged, how many iterations it took, and how many of them are no sign of a
     /// hard step: those that changed no state (taken for the forces alone: friction and
-    /// the shares of a step) and, in a static analysis, those that changed only stick and
-    /// slip (docs/method.md section 7).
+    /// the shares of a step) and those that changed only stick and slip (docs/method.md
+    /// section 7).
     pub(crate) fn open_close_iteration(
         &mut self,
         rec: &mut StepRecord,
     ) -> Result<(bool, u32, u32), SimError> {
         let max_oci = self.model.params.max_oci;
         let bound = max_oci.saturating_mul(OCI_GRACE);
-        let static_steps = self.model.params.mode == crate::scene::Mode::Static;
         // Each attempt counts its contacts' changes afresh (see `contact_law`).
         self.scratch.flips.clear();
         self.scratch.flips.resize(self.state.contacts.len(), 0);
@@ -182,13 +181,12 @@ impl Simulation {
             // The shares of the step that contacts closing or opening within it act for
             // are taken from the trial before (`Simulation::engaged`, `release`): one more
             // iteration where this trial moves one of them.
-            // In a static analysis (the settling's steps included) an iteration that
-            // changed only stick and slip is no sign of a hard step either
-            // (docs/method.md section 7).
+            // An iteration that changed only stick and slip is no sign of a hard step
+            // either (docs/method.md section 7).
             let slip_only = activated == 0
                 && self.scratch.frictionless_changes == 0
                 && self.scratch.opened_or_closed == 0;
-            if changed > 0 && slip_only && static_steps {
+            if changed > 0 && slip_only {
                 not_hard += 1;
             }
             if changed == 0 {

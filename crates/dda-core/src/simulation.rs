@@ -612,8 +612,8 @@ impl Simulation {
                 *worst = moved_most;
                 if disp <= d_max && rot <= theta_max {
                     rec.oci = iterations;
-                    // Iterations that changed no state (or, static, only stick and slip)
-                    // are no sign of a hard step.
+                    // Iterations that changed no state, or only stick and slip, are no
+                    // sign of a hard step.
                     let decided = iterations - not_hard;
                     let growth = step_growth(decided, max_oci, disp, rot, d_max, theta_max);
                     self.accept(dt, &mut rec)?;
