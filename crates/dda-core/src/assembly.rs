@@ -18,6 +18,7 @@ use dda_geom::DVec2;
 
 /// Fewest free blocks for which per-block terms are computed on the thread pool (when
 /// [`RunOptions::parallel`] is on): below it, waking the pool costs more than it saves.
+#[cfg(feature = "rayon")]
 pub(crate) const PARALLEL_MIN_BLOCKS: usize = 256;
 
 /// A spring in effect in an OCI iteration: its contact, whether it is the shear spring

@@ -311,6 +311,7 @@ impl Simulation {
             shear_penalty: p.shear_penalty,
             open_band: self.open_band(),
         };
+        #[cfg(feature = "rayon")]
         let threads = self.threads();
         let (model, material, sc) = (&self.model, &self.material, &mut self.scratch);
         let (rows, shapes, half, d) = (&sc.rows, &sc.shapes, &sc.half, &sc.d);

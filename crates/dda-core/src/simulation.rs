@@ -132,6 +132,7 @@ pub(crate) struct Scratch {
     pub(crate) flipped: Vec<u32>,
     /// Those of the second half of a contact list decided in two halves
     /// (`Simulation::update_states`), before they join `flipped`.
+    #[cfg(feature = "rayon")]
     pub(crate) flipped_second: Vec<u32>,
     /// Contacts of `flipped` whose joint has no friction (no shear).
     pub(crate) frictionless_changes: usize,
@@ -360,6 +361,7 @@ impl Simulation {
                 reach: 0.0,
                 iteration_ready: false,
                 flipped: Vec::new(),
+                #[cfg(feature = "rayon")]
                 flipped_second: Vec::new(),
                 frictionless_changes: 0,
                 opened_or_closed: 0,
