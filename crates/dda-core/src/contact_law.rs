@@ -319,7 +319,7 @@ impl Simulation {
         // Decides the contacts of `contacts` (the list's from `first` on), counting
         // each one's changes of state in `flips` where it has them, and lists in
         // `flipped` the contacts that changed state or sliding direction; returns how
-        // many of them are frictionless.
+        // many of them are frictionless, and how many opened or closed.
         let run =
             |first: usize, contacts: &mut [Contact], flips: &mut [u8], flipped: &mut Vec<u32>| {
                 let mut frictionless = 0;

@@ -179,17 +179,17 @@ impl Simulation {
             if it >= max_oci && (activated > 0 || self.scratch.frictionless_changes > 0) {
                 return Ok((false, it, not_hard));
             }
-            // The shares of the step that contacts closing or opening within it act for
-            // are taken from the trial before (`Simulation::engaged`, `release`): one more
-            // iteration where this trial moves one of them.
             // An iteration that changed only stick and slip is no sign of a hard step
-            // either (docs/method.md section 7).
+            // (docs/method.md section 7).
             let slip_only = activated == 0
                 && self.scratch.frictionless_changes == 0
                 && self.scratch.opened_or_closed == 0;
             if changed > 0 && slip_only {
                 not_hard += 1;
             }
+            // The shares of the step that contacts closing or opening within it act for
+            // are taken from the trial before (`Simulation::engaged`, `release`): one more
+            // iteration where this trial moves one of them.
             if changed == 0 {
                 if it >= max_oci || !(self.shares_moved() || self.friction_moved()) {
                     return Ok((true, it, not_hard));

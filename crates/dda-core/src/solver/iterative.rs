@@ -767,6 +767,16 @@ mod tests {
 
     /// A chain of 12 blocks whose inertia terms (B B^T + I / 2, random B) are tied by stiff
     /// springs p c c^T (p = 1e3, random rows): K = I + springs >= I, as in the engine.
+    /// An iterative system of `nb` blocks of `nd` unknowns coupled on `pairs`, cleared,
+    /// and the zero dense matrix of its size.
+    fn empty(nb: usize, nd: usize, pairs: &[(u32, u32)]) -> (BlockSystem, Vec<Vec<f64>>) {
+        let mut sys = BlockSystem::iterative();
+        sys.set_pattern(nb, nd, pairs).unwrap();
+        sys.clear();
+        let n = nb * nd;
+        (sys, vec![vec![0.0; n]; n])
+    }
+
     /// Returns the system (assembled, inertia set), its inertia terms and the exact
     /// solution by dense elimination.
     fn chain(nd: usize) -> (BlockSystem, Vec<Mat6>, Vec<f64>) {
@@ -776,11 +786,8 @@ mod tests {
             .chain((0..nb as u32 - 3).map(|i| (i, i + 3)))
             .collect();
         pairs.sort_unstable();
-        let mut sys = BlockSystem::iterative();
-        sys.set_pattern(nb, nd, &pairs).unwrap();
-        sys.clear();
+        let (mut sys, mut dense) = empty(nb, nd, &pairs);
         let n = nb * nd;
-        let mut dense = vec![vec![0.0; n]; n];
         let mut rnd = rng(7);
         let mut inertia = Vec::new();
         for i in 0..nb {
@@ -933,11 +940,8 @@ mod tests {
                 (6, 8),
                 (7, 8),
             ];
-            let mut sys = BlockSystem::iterative();
-            sys.set_pattern(nb, nd, &pairs).unwrap();
-            sys.clear();
+            let (mut sys, mut dense) = empty(nb, nd, &pairs);
             let n = nb * nd;
-            let mut dense = vec![vec![0.0; n]; n];
             let mut rnd = rng(5);
             let mut term = |sys: &mut BlockSystem, dense: &mut Vec<Vec<f64>>, i: u32, j: u32| {
                 let u: Vec6 = std::array::from_fn(|k| if k < nd { rnd() } else { 0.0 });
