@@ -7,8 +7,10 @@
 //! that would close (p |d|) or the tension a closed one would have to hold (p d), the
 //! shear force beyond the friction limit of a locked contact that would slide, the
 //! shear spring force a sliding contact would take if it locked. A change is made only
-//! when that force exceeds [`DECISION_BAND`] of the contact's force scale: the external
-//! force (weight and point loads) on the lighter of its two free blocks. Below it the contact keeps its state: a hysteresis band stated in the
+//! when that force exceeds [`DECISION_BAND`] of the contact's force scale: the smaller
+//! of its two free blocks' scales, each the larger of the external force on the block
+//! (weight and point loads) and the largest normal force its contacts carried at the
+//! step's start. Below it the contact keeps its state: a hysteresis band stated in the
 //! step's own forces. Where blocks meet along flush joints (T- and X-junctions, the
 //! two covers of one corner) contacts sit at d_n = 0 with forces that hover around
 //! zero; decided by sign they flip between open and closed, locked and sliding, on
@@ -49,7 +51,7 @@ use crate::simulation::Simulation;
 /// holds that much beyond its friction limit. Our choice, measured in
 /// `docs/method.md` (section 6): 1e-4, 1e-3 and 1e-2 all let a running-bond wall and a
 /// grid of equal blocks stand; 1e-3 keeps the force error of a decision to a thousandth
-/// of the lighter block's weight.
+/// of the forces on the less loaded of its blocks.
 pub(crate) const DECISION_BAND: f64 = 1e-3;
 use crate::assembly::joint_of;
 use crate::scene::JointProps;
@@ -263,17 +265,18 @@ fn cycle_ended(c: &Contact, n: Contact, flips: u8, at_rest: impl FnOnce() -> Con
 }
 
 /// The force below which a change of contact `key`'s state is negligible:
-/// [`DECISION_BAND`] of the lighter of its two blocks' force scales (`scale`, by block;
+/// [`DECISION_BAND`] of the smaller of its two blocks' force scales (`scale`, by block;
 /// see the module docs).
 pub(crate) fn decision_band(scale: &[f64], key: dda_contact::ContactKey) -> f64 {
     DECISION_BAND * scale[key.vertex_block as usize].min(scale[key.edge_block as usize])
 }
 
 impl Simulation {
-    /// Sets each block's force scale (see the module docs): the magnitude of the external
-    /// force on a free block, its weight and its point loads; infinite for a fixed block.
-    /// The inertia terms of the time scheme are not forces on the block: a block moving
-    /// at constant speed has none.
+    /// Sets each block's force scale (see the module docs): for a free block the larger
+    /// of the magnitude of its external force (its weight and point loads) and the
+    /// largest normal force a closed contact of it carried at the step's start; infinite
+    /// for a fixed block. The inertia terms of the time scheme are not forces on the
+    /// block: a block moving at constant speed has none.
     pub(crate) fn set_force_scale(&mut self) {
         let g = self.gravity();
         self.scratch.force_scale.clear();
@@ -288,6 +291,18 @@ impl Simulation {
                 .sum();
             // mass[0][0] is the block's mass (rho times its area).
             self.scratch.force_scale[i as usize] = (mass[0][0] * g + loads).length();
+        }
+        // The forces its contacts carry: deep in a mass they are many times a block's
+        // weight, and a decision is negligible against them, not against the weight.
+        let scale = &mut self.scratch.force_scale;
+        for c in &self.state.contacts.contacts {
+            if !(c.active && c.state.is_closed()) {
+                continue;
+            }
+            for b in [c.key.vertex_block, c.key.edge_block] {
+                let s = &mut scale[b as usize];
+                *s = s.max(c.normal_force);
+            }
         }
     }
 
@@ -699,5 +714,60 @@ mod tests {
             (force - expected).abs() < 1e-9 * friction,
             "spring force {force} N, friction {friction} N"
         );
+    }
+
+    /// A block's force scale is the larger of its weight and the largest normal force a
+    /// closed contact of it carries: the bottom block of a stack of ten carries the
+    /// weight of all ten on its base, at most four contacts (two corners, a cover from
+    /// each block at each), so one of them carries more than twice its own weight, and
+    /// its band is a thousandth of that; the top block's contacts carry its weight alone.
+    #[test]
+    fn a_block_deep_in_a_stack_scales_its_band_by_the_forces_it_carries() {
+        use crate::scene::{Format, Scene};
+        let mut text = String::from(
+            "name = \"stack\"\n[analysis]\nduration = 0.01\ntime_step = 0.001\n\
+             max_displacement = 0.001\nnormal_penalty = 1e10\ngravity = [0.0, -9.81]\n\
+             [materials.rock]\ndensity = 2500.0\nyoung = 1e10\npoisson = 0.25\n\
+             [joints.default]\nfriction_deg = 30.0\n\
+             [[blocks]]\nid = \"ground\"\nmaterial = \"rock\"\nfixed = true\n\
+             vertices = [[-2.0, -1.0], [3.0, -1.0], [3.0, 0.0], [-2.0, 0.0]]\n",
+        );
+        for k in 0..10 {
+            let (y0, y1) = (k as f64, k as f64 + 1.0);
+            text += &format!(
+                "[[blocks]]\nid = \"b{k}\"\nmaterial = \"rock\"\n\
+                 vertices = [[0.0, {y0}], [1.0, {y0}], [1.0, {y1}], [0.0, {y1}]]\n"
+            );
+        }
+        let (_, model) = Scene::parse(&text, Format::Toml, "stack.toml").unwrap();
+        let mut sim = Simulation::new(model, crate::RunOptions::default());
+        sim.step().unwrap();
+        sim.set_force_scale();
+        let weight = 2500.0 * 9.81;
+        // The largest normal force of a closed contact of block i, read from the contacts.
+        let carried = |i: u32| {
+            sim.contacts()
+                .contacts
+                .iter()
+                .filter(|c| c.active && c.state.is_closed())
+                .filter(|c| c.key.vertex_block == i || c.key.edge_block == i)
+                .map(|c| c.normal_force)
+                .fold(0.0, f64::max)
+        };
+        let (bottom, top) = (1, 10);
+        let scale = &sim.scratch.force_scale;
+        assert!(carried(bottom) > 2.0 * weight, "{} N", carried(bottom));
+        assert_eq!(scale[bottom as usize], carried(bottom));
+        assert!(
+            carried(top) <= weight * (1.0 + DECISION_BAND),
+            "{} N",
+            carried(top)
+        );
+        let own = scale[top as usize];
+        assert!(
+            (own - weight).abs() <= weight * DECISION_BAND,
+            "{own} N, weight {weight} N"
+        );
+        assert_eq!(scale[0], f64::INFINITY);
     }
 }

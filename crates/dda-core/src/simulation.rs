@@ -140,8 +140,9 @@ pub(crate) struct Scratch {
     pub(crate) opened_or_closed: usize,
     /// Changes of state of each contact in this attempt's open-close iteration.
     pub(crate) flips: Vec<u8>,
-    /// Each block's force scale for the contact law's decisions: the magnitude of the
-    /// external force on it (weight and point loads); infinite for a fixed block.
+    /// Each block's force scale for the contact law's decisions: the larger of the
+    /// external force on it (weight and point loads) and the largest normal force of its
+    /// closed contacts at the step's start; infinite for a fixed block.
     pub(crate) force_scale: Vec<f64>,
     /// The dashpots beside the contacts' normal springs in this attempt.
     pub(crate) dashpots: crate::assembly::Dashpots,
