@@ -67,12 +67,12 @@ impl Simulation {
     ///
     /// A scene with friction predicts from the step's own matrix instead
     /// ([`Simulation::predict_states_exactly`], as a system solved iteratively always
-    /// does), from its second step on: stick and slip turn on tangential motions of the
-    /// order of the band over the shear penalty (nanometres), which a solve with the last
-    /// step's matrix gets wrong in sign (traced on a pit wall's bedding contact: stuck by
-    /// the prediction on a reversal of 6e-9 m, slid again by the step's iterations), while
-    /// open and closed turn on gaps it predicts well. The step's factor then serves the
-    /// open-close iteration's low-rank updates from its first iteration on. Measured
+    /// does), from its second step on. The last step's factor is that of its first
+    /// iteration, with the states predicted then; the changes its later iterations made
+    /// reached their solutions through low-rank terms this prediction does not apply, and
+    /// where many contacts go between stick and slip within a step it starts from states
+    /// the last step had left behind. The step's factor then serves the open-close
+    /// iteration's low-rank updates from its first iteration on. Measured
     /// (docs/method.md section 3): the seismic example 750 steps and 1,138 OCI iterations
     /// against 783 and 3,113; without friction the paper's 826-block column took 1,613
     /// factorisations against 1,067 and 19% longer for 6% fewer OCI iterations, so
