@@ -429,7 +429,10 @@ pub fn run(out: &Path) -> Result<(), String> {
          (`docs/method.md` section 13), which loads the springs before the run. Measured\n  \
          again after the contact law's changes of 2026-11-25 (`docs/method.md` sections 6\n  \
          and 12), the ring leaves less: the table's errors are 1.1e-5 to 5.3e-5 across\n  \
-         d_max and 2.6e-5 to 4.8e-4 across the penalties.\n\
+         d_max and 2.6e-5 to 4.8e-4 across the penalties. Measured again after the states of\n  \
+         a scene with friction were predicted from the step's own matrix (2026-11-26,\n  \
+         `docs/method.md` section 3): 4.7e-7 to 3.0e-5 across d_max and 3.0e-5 to 4.8e-4\n  \
+         across the penalties.\n\
          - Rebound: the open-close iteration loses much of the energy of an impact. A\n  \
          contact carries its spring over whole steps and drops it, with the energy it\n  \
          holds, the step it opens; the stiffer the spring against the step (the contact\n  \
