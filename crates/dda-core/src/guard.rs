@@ -109,6 +109,8 @@ pub(crate) struct Checked {
     supplied: f64,
     /// The energy created over the reference (negative: none).
     ratio: f64,
+    /// The penetration of the deepest closed contact, m (0 if none penetrates).
+    pub(crate) max_pen: f64,
 }
 
 impl Checked {
@@ -121,7 +123,7 @@ impl Checked {
 impl Simulation {
     /// The deepest closed contact of the trial solution: its penetration (0 if none
     /// penetrates) and its index.
-    pub(crate) fn deepest_contact(&self) -> (f64, Option<usize>) {
+    fn deepest_contact(&self) -> (f64, Option<usize>) {
         let (mut max_pen, mut deepest) = (0.0f64, None);
         for (k, c) in self.state.contacts.contacts.iter().enumerate() {
             if c.active && c.state.is_closed() {
@@ -134,21 +136,17 @@ impl Simulation {
         (max_pen, deepest)
     }
 
-    /// The physics guard (see `guard`) on the trial solution of a step of `dt` whose
-    /// deepest closed contact is `deepest`, `max_pen` deep: a violation stops the run
-    /// before the step is committed, or is recorded, as the run's options say. Reads
-    /// the state only, and updates the energy balance.
-    pub(crate) fn guard(
-        &mut self,
-        dt: f64,
-        max_pen: f64,
-        deepest: Option<usize>,
-    ) -> Result<(), SimError> {
+    /// The physics guard (see `guard`) on a trial solution, given what its checks found
+    /// ([`Simulation::check_physics`]): a violation stops the run before the step is
+    /// committed, or is recorded, as the run's options say. Reads the state only, and
+    /// updates the energy balance.
+    pub(crate) fn guard(&mut self, checked: Checked) -> Result<(), SimError> {
         let Checked {
             broken,
             supplied,
             ratio,
-        } = self.check_physics(dt, max_pen, deepest);
+            ..
+        } = checked;
         if let Some((_, what, blocks, _)) = broken.first()
             && self.options.stop_on_violation
         {
@@ -181,12 +179,8 @@ impl Simulation {
 
     /// The guard's checks on the trial solution of a step of `dt` (see
     /// [`Simulation::guard`]), with no effect on the run.
-    pub(crate) fn check_physics(
-        &mut self,
-        dt: f64,
-        max_pen: f64,
-        deepest: Option<usize>,
-    ) -> Checked {
+    pub(crate) fn check_physics(&mut self, dt: f64) -> Checked {
+        let (max_pen, deepest) = self.deepest_contact();
         let p = &self.model.params;
         let dynamic = p.mode == Mode::Dynamic;
         let gravity = self.gravity();
@@ -276,6 +270,7 @@ impl Simulation {
             broken,
             supplied,
             ratio,
+            max_pen,
         }
     }
 }

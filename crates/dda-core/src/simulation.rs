@@ -15,7 +15,7 @@ use crate::assembly::{ShearRows, Spring};
 use crate::detection::NEIGHBOUR_SKIN;
 use crate::diagnosis::{Diagnosis, SimError};
 use crate::effects::Effects;
-use crate::guard::{self, EnergyBalance, Violation};
+use crate::guard::{self, Checked, EnergyBalance, Violation};
 use crate::iterative::solves_iteratively;
 use crate::kinematics::{Mat6, Vec6, mass_matrix};
 use crate::scene::Model;
@@ -603,10 +603,8 @@ impl Simulation {
             // An attempt that went past `max_oci` (`OCI_GRACE`) is kept only where its
             // result keeps the physics guard; otherwise it is cut as one that did not
             // converge.
-            let graced_badly = converged && iterations > max_oci && {
-                let (max_pen, deepest) = self.deepest_contact();
-                self.check_physics(dt, max_pen, deepest).broken()
-            };
+            let checked = (converged && iterations > max_oci).then(|| self.check_physics(dt));
+            let graced_badly = checked.as_ref().is_some_and(Checked::broken);
             if graced_badly {
                 dt /= 3.0;
                 reason = "open-close iteration past max_oci broke physics";
@@ -619,7 +617,7 @@ impl Simulation {
                     // sign of a hard step.
                     let decided = iterations - not_hard;
                     let growth = step_growth(decided, max_oci, disp, rot, d_max, theta_max);
-                    self.accept(dt, &mut rec)?;
+                    self.accept(dt, &mut rec, checked)?;
                     if landing {
                         self.state.t = target;
                     } else {

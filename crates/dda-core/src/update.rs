@@ -4,7 +4,7 @@
 
 use crate::assembly::StepRule;
 use crate::diagnosis::SimError;
-use crate::guard::add_kinetic;
+use crate::guard::{Checked, add_kinetic};
 use crate::kinematics::{Vec6, elasticity, mass_matrix};
 use crate::scene::{Integration, Mode};
 use crate::simulation::Simulation;
@@ -14,10 +14,17 @@ use dda_geom::{check_displacement, displace_point};
 
 impl Simulation {
     /// Commits the trial solution: moves blocks, updates stresses and velocities, and
-    /// records penetration.
-    pub(crate) fn accept(&mut self, dt: f64, rec: &mut StepRecord) -> Result<(), SimError> {
-        let (max_pen, deepest) = self.deepest_contact();
-        self.guard(dt, max_pen, deepest)?;
+    /// records penetration. `checked` is what the physics guard's checks found on it, if
+    /// they were made already (an attempt past `max_oci`); otherwise they are made here.
+    pub(crate) fn accept(
+        &mut self,
+        dt: f64,
+        rec: &mut StepRecord,
+        checked: Option<Checked>,
+    ) -> Result<(), SimError> {
+        let checked = checked.unwrap_or_else(|| self.check_physics(dt));
+        let max_pen = checked.max_pen;
+        self.guard(checked)?;
         rec.max_penetration = max_pen;
         rec.dt = dt;
         // Check every block's motion first, so that a failure leaves the state untouched.

@@ -765,8 +765,6 @@ mod tests {
     use super::*;
     use crate::kinematics::Vec6;
 
-    /// A chain of 12 blocks whose inertia terms (B B^T + I / 2, random B) are tied by stiff
-    /// springs p c c^T (p = 1e3, random rows): K = I + springs >= I, as in the engine.
     /// An iterative system of `nb` blocks of `nd` unknowns coupled on `pairs`, cleared,
     /// and the zero dense matrix of its size.
     fn empty(nb: usize, nd: usize, pairs: &[(u32, u32)]) -> (BlockSystem, Vec<Vec<f64>>) {
@@ -777,6 +775,8 @@ mod tests {
         (sys, vec![vec![0.0; n]; n])
     }
 
+    /// A chain of 12 blocks whose inertia terms (B B^T + I / 2, random B) are tied by stiff
+    /// springs p c c^T (p = 1e3, random rows): K = I + springs >= I, as in the engine.
     /// Returns the system (assembled, inertia set), its inertia terms and the exact
     /// solution by dense elimination.
     fn chain(nd: usize) -> (BlockSystem, Vec<Mat6>, Vec<f64>) {
