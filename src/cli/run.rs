@@ -548,6 +548,14 @@ impl Job {
     fn write_frame(&mut self, svg: bool) -> Result<(), Failure> {
         let path = self.work.join("frames.jsonl");
         let frame = Frame::of(&self.sim, svg, self.resolution);
+        if !frame.is_finite() {
+            // JSON would print them as `null`, which no reader takes back.
+            return Err(Failure::Output(format!(
+                "the frame at t = {} s holds a number that is not finite (a fault of dda, \
+                 not of the scene)",
+                frame.t
+            )));
+        }
         let line = serde_json::to_string(&frame)
             .map_err(|e| Failure::Output(format!("cannot serialise a frame: {e}")))?;
         writeln!(self.frames, "{line}").map_err(|e| output_error(e, &path))?;
@@ -796,7 +804,6 @@ impl Job {
         let json = serde_json::to_string_pretty(&summary)
             .map_err(|e| Failure::Output(format!("cannot serialise the summary: {e}")))?;
         write_new(&self.work.join("summary.json"), &(json + "\n"))?;
-        render_outputs(&self.work, &self.scene, self.sim.model(), &summary)?;
         self.staging.publish(&self.out)?;
         // A finished run's checkpoint goes only now: killed before this point, the run
         // is still resumable from its staging folder.
@@ -805,6 +812,16 @@ impl Job {
             std::fs::remove_file(&published_checkpoint)
                 .map_err(|e| output_error(e, &published_checkpoint))?;
         }
+        // The pictures and the report are drawn from the published files, so that a
+        // failure to draw them loses nothing of the run: exit 1, the run in place.
+        render_outputs(&self.out, &self.scene, self.sim.model(), &summary).map_err(|e| {
+            let (Failure::Input(m) | Failure::Output(m)) = e;
+            Failure::Output(format!(
+                "{m}; the run is in {} without its report: `dda render {}` draws it again",
+                self.out.display(),
+                self.out.display()
+            ))
+        })?;
 
         if !self.quiet {
             let s = &summary;

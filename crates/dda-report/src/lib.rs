@@ -146,12 +146,23 @@ pub struct Frame {
 }
 
 /// `x` to four significant digits (plenty for a colour), so that frames print short.
+/// Finite for every finite `x`: below about 1e-305 (the speeds and stresses of blocks
+/// at rest reach 1e-315) the scale 10^e would overflow, and x times it be NaN, which a
+/// frame would print as `null`; the scale is then applied in two factors. Near
+/// f64::MAX, where rounding up would overflow, `x` is kept as it is.
 fn four_digits(x: f64) -> f64 {
     if x == 0.0 || !x.is_finite() {
         return 0.0;
     }
-    let scale = 10f64.powi(3 - x.abs().log10().floor() as i32);
-    (x * scale).round() / scale
+    let e = 3 - x.abs().log10().floor() as i32;
+    let (a, b) = if e > 300 {
+        (10f64.powi(300), 10f64.powi(e - 300))
+    } else {
+        (1.0, 10f64.powi(e))
+    };
+    let r = ((x * a) * b).round() / b / a;
+    // Rounded up past f64::MAX, it keeps its digits.
+    if r.is_finite() { r } else { x }
 }
 
 impl Frame {
@@ -209,6 +220,16 @@ impl Frame {
             contacts,
             stress,
         }
+    }
+
+    /// Whether every number of the frame is finite (JSON has no NaN or infinity:
+    /// serialised, they would print as `null`).
+    pub fn is_finite(&self) -> bool {
+        self.t.is_finite()
+            && [&self.speed, &self.contacts, &self.stress]
+                .into_iter()
+                .chain(&self.blocks)
+                .all(|v| v.iter().all(|x| x.is_finite()))
     }
 
     /// The polygon of block `i`, as points.
@@ -486,6 +507,54 @@ pub fn escape(s: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Four significant digits of every finite number are finite, the normal ones within
+    /// half a unit of the fourth digit (5e-4 of themselves), the subnormal ones (which
+    /// carry fewer digits) of their sign or zero.
+    #[test]
+    fn four_digits_are_finite_over_the_whole_range() {
+        let normal = [
+            f64::MIN_POSITIVE,
+            1e-305,
+            1.234_567e-300,
+            9.999_9e-5,
+            1.0,
+            123_456.0,
+            f64::MAX,
+        ];
+        for x in normal.into_iter().flat_map(|x| [x, -x]) {
+            let r = four_digits(x);
+            assert!(r.is_finite(), "{x:e} -> {r}");
+            assert!((r - x).abs() <= 5e-4 * x.abs(), "{x:e} -> {r:e}");
+        }
+        for x in [4.671_444_386e-315, -8.435_683_709_5e-314, 5e-324] {
+            let r = four_digits(x);
+            assert!(
+                r.is_finite() && (r == 0.0 || r.signum() == x.signum()),
+                "{x:e} -> {r}"
+            );
+        }
+        assert_eq!(four_digits(f64::NAN), 0.0);
+    }
+
+    /// A frame with a number JSON cannot hold is told apart (a run refuses to write it).
+    #[test]
+    fn a_frame_with_a_nan_is_not_finite() {
+        let frame = Frame {
+            t: 0.5,
+            svg: false,
+            blocks: vec![vec![0.0, 0.0, 1.0, 0.0, 1.0, 1.0]],
+            speed: vec![0.25],
+            contacts: vec![],
+            stress: vec![1.0, 2.0, 3.0],
+        };
+        assert!(frame.is_finite());
+        let mut vertex = frame.clone();
+        vertex.blocks[0][3] = f64::NAN;
+        let mut stress = frame.clone();
+        stress.stress[2] = f64::INFINITY;
+        assert!(!vertex.is_finite() && !stress.is_finite());
+    }
 
     /// An L-shaped region is one body of two glued parts: what is drawn of their outlines
     /// is the L's perimeter (8 m), not the parts' (which add their seam twice).
