@@ -134,9 +134,10 @@ pub struct Ticks {
 }
 
 impl Ticks {
-    /// The ticks of a range from `lo` to `hi` (a flat or empty range gets a unit span).
+    /// The ticks of a range from `lo` to `hi` (a flat or empty range gets a unit span, and
+    /// so does one narrower than 1e-300, whose steps would be subnormal numbers or zero).
     pub fn new(lo: f64, hi: f64) -> Self {
-        let (lo, hi) = if hi > lo && (hi - lo).is_finite() {
+        let (lo, hi) = if hi > lo && (hi - lo).is_finite() && hi - lo >= 1e-300 {
             (lo, hi)
         } else if lo.is_finite() {
             (lo, lo + 1.0)
@@ -196,6 +197,9 @@ mod tests {
             (-0.0021, 0.0007),
             (0.002, 0.1),
             (3.0, 3.0),
+            (0.0, 1e-320),
+            (0.0, 5e-324),
+            (-2.0e-310, 1.0e-310),
         ] {
             let t = Ticks::new(lo, hi);
             let v: Vec<f64> = t.values().collect();
