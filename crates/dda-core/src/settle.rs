@@ -117,6 +117,14 @@ const SETTLE_ROUNDS: u32 = 5;
 /// created.
 const SETTLE_CHECK: f64 = 1e-2;
 
+/// Blocks in contact whose steady translations differ by this share of the larger, or
+/// more (and by a force beyond the decision band), are taken back as separate groups
+/// ([`Simulation::move_together`]): one slides and the other rests, or slides another
+/// way. Our choice, between the whole of a slide against a block at rest and the few
+/// percent by which the courses of a wall sliding as one body differ (the walls of
+/// `tests/physics/stacks.rs` slide within their bounds as before).
+const SETTLE_APART: f64 = 0.5;
+
 /// What one round of settling did ([`Simulation::relax`]).
 struct Relaxed {
     /// Static steps taken.
@@ -550,9 +558,15 @@ impl Simulation {
     fn group_translations(&self, steady: &[DVec2]) -> Vec<DVec2> {
         let n = self.state.blocks.len();
         let mut group = Groups::new(n);
+        let p = self.model.params.normal_penalty;
         for c in &self.state.contacts.contacts {
             let (a, b) = (c.key.vertex_block as usize, c.key.edge_block as usize);
-            if c.active && c.state.is_closed() && self.free[a].is_some() && self.free[b].is_some() {
+            if c.active
+                && c.state.is_closed()
+                && self.free[a].is_some()
+                && self.free[b].is_some()
+                && self.move_together(steady, p, a, b)
+            {
                 group.join(a, b);
             }
         }
@@ -572,6 +586,19 @@ impl Simulation {
                 t / m
             })
             .collect()
+    }
+
+    /// Whether blocks `a` and `b` (in contact) move as one in a step of the steady
+    /// translations `steady`: their translations differ by a force within the decision
+    /// band at the normal penalty `p` (as [`Simulation::moved_as_groups`] counts it), or
+    /// by less than [`SETTLE_APART`] of the larger. A wedge sliding on a mass at rest
+    /// does neither: moved back with the mass as one group, by the group's mean, it
+    /// would push the mass into its base and leave most of its own slide (docs/method.md
+    /// section 13).
+    fn move_together(&self, steady: &[DVec2], p: f64, a: usize, b: usize) -> bool {
+        let apart = (steady[a] - steady[b]).length();
+        let band = DECISION_BAND * self.scratch.force_scale[a].min(self.scratch.force_scale[b]);
+        p * apart <= band || apart < SETTLE_APART * steady[a].length().max(steady[b].length())
     }
 
     /// The vertices of every free block, block by block.
