@@ -283,7 +283,14 @@ pub fn resume(args: ResumeArgs) -> Result<ExitCode, Failure> {
         Checkpoint::load(&stopped).map_err(|e| bad(e.to_string()))?;
         std::fs::rename(&out, &work).map_err(|e| output_error(e, &work))?;
     }
-    let result = resume_staged(args, &work, &out);
+    // Messages name the checkpoint where the user has it: in the output folder, for a
+    // run moved back to staging here (and put back if the resume is refused).
+    let named = if moved {
+        stopped
+    } else {
+        work.join(CHECKPOINT_FILE)
+    };
+    let result = resume_staged(args, &work, &out, &named);
     if moved && matches!(result, Err(Failure::Input(_))) && !out.exists() {
         let _ = std::fs::rename(&work, &out);
         let _ = std::fs::remove_file(out.join(super::outdir::LOCK));
@@ -291,8 +298,14 @@ pub fn resume(args: ResumeArgs) -> Result<ExitCode, Failure> {
     result
 }
 
-/// [`resume`] of the run whose staging folder is `work` and output folder `out`.
-fn resume_staged(args: ResumeArgs, work: &Path, out: &Path) -> Result<ExitCode, Failure> {
+/// [`resume`] of the run whose staging folder is `work` and output folder `out`; its
+/// checkpoint is named `named` in messages.
+fn resume_staged(
+    args: ResumeArgs,
+    work: &Path,
+    out: &Path,
+    named: &Path,
+) -> Result<ExitCode, Failure> {
     let (work, out) = (work.to_path_buf(), out.to_path_buf());
     let path = work.join(CHECKPOINT_FILE);
     // A folder in use is named as such before anything else is said of it.
@@ -323,18 +336,22 @@ fn resume_staged(args: ResumeArgs, work: &Path, out: &Path) -> Result<ExitCode, 
     let Some(staging) = staging else {
         return Err(bad(format!("{} does not exist", work.display())));
     };
-    let ck = Checkpoint::load(&path).map_err(|e| bad(e.to_string()))?;
-    let scene = ck.scene(&path).map_err(|e| bad(e.to_string()))?;
-    let model = validate(&scene, &path.display().to_string(), None)?;
+    let ck = Checkpoint::from_bytes(
+        &std::fs::read(&path).map_err(|e| bad(format!("{}: {e}", named.display())))?,
+        named,
+    )
+    .map_err(|e| bad(e.to_string()))?;
+    let scene = ck.scene(named).map_err(|e| bad(e.to_string()))?;
+    let model = validate(&scene, &named.display().to_string(), None)?;
     let mut marks: OutputMarks = serde_json::from_str(&ck.client).map_err(|e| {
         bad(format!(
             "{}: its record of the outputs: {e}",
-            path.display()
+            named.display()
         ))
     })?;
     marks.keep_going |= args.limits.keep_going;
     let sim = ck
-        .resume(model, args.limits.options(marks.keep_going), &path)
+        .resume(model, args.limits.options(marks.keep_going), named)
         .map_err(|e| bad(e.to_string()))?;
     let history = reopen(&work.join("history.csv"), marks.history_bytes)?;
     let frames = reopen(&work.join("frames.jsonl"), marks.frames_bytes)?;

@@ -1545,3 +1545,25 @@ fn a_stopped_run_resumes_step_budget_by_budget_to_the_whole_run() {
         );
     }
 }
+
+/// A resumed run's messages name its checkpoint where the user has it, in the output
+/// folder, not in the staging folder the run goes back to while it resumes (which no
+/// longer exists when the user reads them): the warnings of the scene the checkpoint
+/// holds (`tests/scenes/rock-mass.toml` drops slivers below its `min_area`).
+#[test]
+fn a_resumed_run_names_its_checkpoint_where_the_user_has_it() {
+    let dir = scratch("resume-names");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/rock-mass.toml");
+    let out = dir.join("out");
+    let o = run_file(Path::new(scene), &out, &["--max-steps", "2"]);
+    assert_eq!(o.status.code(), Some(1));
+    let o = dda(&["resume", out.to_str().unwrap(), "--max-steps", "1"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    let named = format!(
+        "{}: key `regions[1].min_area`",
+        out.join("checkpoint.bin").display()
+    );
+    assert!(err.contains(&named), "{err}");
+    assert!(!err.contains(".out.partial"), "{err}");
+}
