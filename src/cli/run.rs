@@ -22,7 +22,7 @@ use dda::report::{
     BOLTS_HEADER, Frame, HISTORY_HEADER, MEASUREMENTS_HEADER, bolt_rows, frame_resolution,
     frame_view, history_row, measurement_rows,
 };
-use dda_core::{Checkpoint, RunOptions, Scene, Simulation, Summary};
+use dda_core::{Checkpoint, RunOptions, Scene, SettlingSummary, Simulation, Summary};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
 use std::fs::File;
@@ -36,7 +36,7 @@ pub const CHECKPOINT_FILE: &str = "checkpoint.bin";
 /// How far a run's output files had got when a checkpoint was taken, so that a resume
 /// cuts them back to that point and appends exactly what the run would have; kept in
 /// the checkpoint as the command's own record (JSON).
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 struct OutputMarks {
     /// Bytes of history.csv written.
     history_bytes: u64,
@@ -59,6 +59,10 @@ struct OutputMarks {
     /// The scene file or built-in scene the run was made from, as named.
     #[serde(default)]
     source: Option<String>,
+    /// What the settling did, once it has settled (summary.json's `settling`; kept here
+    /// so that a resumed run's summary says it too).
+    #[serde(default)]
+    settling: Option<SettlingSummary>,
 }
 
 /// Options of `run` and `resume` that bound or relax a run.
@@ -678,6 +682,13 @@ impl Job {
         });
         match outcome {
             Ok(true) => {
+                if let Some(done) = self.sim.settling() {
+                    self.marks.settling = Some(SettlingSummary {
+                        static_steps: done.steps,
+                        converged: done.converged,
+                        seconds: began.elapsed().as_secs_f64(),
+                    });
+                }
                 if let Some(done) = self.sim.settling()
                     && !self.quiet
                 {
@@ -818,6 +829,7 @@ impl Job {
         let mut summary = Summary::of(&self.sim, error.clone());
         summary.status = status.to_string();
         summary.source.clone_from(&self.marks.source);
+        summary.settling = self.marks.settling;
         let json = serde_json::to_string_pretty(&summary)
             .map_err(|e| Failure::Output(format!("cannot serialise the summary: {e}")))?;
         write_new(&self.work.join("summary.json"), &(json + "\n"))?;

@@ -49,5 +49,7 @@ pub use self::settle::{SettleProgress, Settling};
 pub use self::simulation::{RunOptions, Simulation, on_pool};
 pub use self::solver::{BlockSystem, RankOne, SolveError, SolverCounters};
 pub use self::state::{BlockState, RunState, Snapshot, StepRecord, Totals};
-pub use self::summary::{BlockSummary, BoltSummary, Broken, Removed, Seconds, Summary};
+pub use self::summary::{
+    BlockSummary, BoltSummary, Broken, Removed, Seconds, SettlingSummary, Summary,
+};
 pub use self::timing::Phase;

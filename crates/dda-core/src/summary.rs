@@ -102,6 +102,22 @@ pub struct Summary {
     /// The bolts at the end, in scene order.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub bolts: Vec<BoltSummary>,
+    /// What the settling did before t = 0, for a run that settled (set by the caller,
+    /// which times it: [`Summary::of`] leaves it `None`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub settling: Option<SettlingSummary>,
+}
+
+/// What the settling did before t = 0 (docs/method.md section 13).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SettlingSummary {
+    /// Static steps taken.
+    pub static_steps: u32,
+    /// Whether its motion converged; if not, it stopped on its rule for no progress or
+    /// at its most steps.
+    pub converged: bool,
+    /// Wall time it took, s.
+    pub seconds: f64,
 }
 
 /// A bolt at the end of a run.
@@ -183,6 +199,7 @@ impl Summary {
             max_penetration: t.max_penetration,
             energy_excess: sim.energy_balance().worst_ratio,
             warnings: sim.violations().iter().map(|v| v.warning()).collect(),
+            settling: None,
             bolts: sim
                 .model()
                 .bolts
@@ -233,6 +250,7 @@ impl Summary {
     pub fn without_timing(&self) -> Self {
         Summary {
             seconds: Seconds::default(),
+            settling: self.settling.map(|s| SettlingSummary { seconds: 0.0, ..s }),
             ..self.clone()
         }
     }

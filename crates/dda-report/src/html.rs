@@ -307,7 +307,7 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
 
     // Summary and parameters.
     page.push_str("<h2>Summary</h2>\n<table>\n");
-    let rows: [(&str, String); 13] = [
+    let rows: [(&str, String); 14] = [
         ("scene", s.scene.clone()),
         (
             "made from",
@@ -343,6 +343,22 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
         ),
         ("max penetration (m)", format!("{:.3e}", s.max_penetration)),
         ("blocks", r.model.blocks.len().to_string()),
+        (
+            "settling before t = 0 (static steps, wall seconds)",
+            match s.settling {
+                Some(st) => format!(
+                    "{}, {:.3}{}",
+                    st.static_steps,
+                    st.seconds,
+                    if st.converged {
+                        ""
+                    } else {
+                        "; stopped without converging"
+                    }
+                ),
+                None => "none".into(),
+            },
+        ),
     ];
     for (k, v) in rows {
         let _ = writeln!(page, "<tr><th>{k}</th><td>{}</td></tr>", escape(&v));
