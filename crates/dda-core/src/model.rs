@@ -268,8 +268,10 @@ impl Scene {
                 "the average-acceleration rule without impact_steps: it damps no vibration \
                  (blocks near their toppling limit rock, and walls sliding on a slope part), \
                  and impacts that span a step or two lose a quarter to a half of their speed \
-                 under it as under the default rule; give impact_steps (10 is a good start), \
-                 whose default rule takes it only in impacts",
+                 under it as under the default rule; give impact_steps (10 is a good start; \
+                 it holds the step to a tenth of each impact's duration, so rock that \
+                 tumbles takes many more steps), whose default rule takes it only in \
+                 impacts",
             ));
         }
         if params.integration == Integration::AverageInImpacts && params.impact_steps.is_none() {
@@ -277,7 +279,8 @@ impl Scene {
                 "analysis.integration",
                 "average-in-impacts without impact_steps: no step is held down for an \
                  impact, so every step is taken by the constant-acceleration rule; give \
-                 impact_steps (10 is a good start)",
+                 impact_steps (10 is a good start; it holds the step to a tenth of each \
+                 impact's duration, so rock that tumbles takes many more steps)",
             ));
         }
         if params.d_tol < 2.0 * params.d_max {
