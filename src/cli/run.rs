@@ -284,17 +284,17 @@ pub fn resume(args: ResumeArgs) -> Result<ExitCode, Failure> {
                 out.display()
             )));
         }
-        Checkpoint::load(&stopped).map_err(|e| bad(e.to_string()))?;
-        std::fs::rename(&out, &work).map_err(|e| output_error(e, &work))?;
     }
-    // Messages name the checkpoint where the user has it: in the output folder, for a
-    // run moved back to staging here (and put back if the resume is refused).
-    let named = if moved {
-        stopped
+    // The checkpoint of a stopped run, loaded where the user has it (and named so in
+    // messages), before the run goes back to staging.
+    let loaded = if moved {
+        let ck = Checkpoint::load(&stopped).map_err(|e| bad(e.to_string()))?;
+        std::fs::rename(&out, &work).map_err(|e| output_error(e, &work))?;
+        Some((ck, stopped))
     } else {
-        work.join(CHECKPOINT_FILE)
+        None
     };
-    let result = resume_staged(args, &work, &out, &named);
+    let result = resume_staged(args, &work, &out, loaded);
     if moved && matches!(result, Err(Failure::Input(_))) && !out.exists() {
         let _ = std::fs::rename(&work, &out);
         let _ = std::fs::remove_file(out.join(super::outdir::LOCK));
@@ -302,13 +302,14 @@ pub fn resume(args: ResumeArgs) -> Result<ExitCode, Failure> {
     result
 }
 
-/// [`resume`] of the run whose staging folder is `work` and output folder `out`; its
-/// checkpoint is named `named` in messages.
+/// [`resume`] of the run whose staging folder is `work` and output folder `out`;
+/// `loaded`, its checkpoint and the path messages name it by, if [`resume`] loaded it
+/// already (else it is loaded from the staging folder).
 fn resume_staged(
     args: ResumeArgs,
     work: &Path,
     out: &Path,
-    named: &Path,
+    loaded: Option<(Checkpoint, PathBuf)>,
 ) -> Result<ExitCode, Failure> {
     let (work, out) = (work.to_path_buf(), out.to_path_buf());
     let path = work.join(CHECKPOINT_FILE);
@@ -340,11 +341,14 @@ fn resume_staged(
     let Some(staging) = staging else {
         return Err(bad(format!("{} does not exist", work.display())));
     };
-    let ck = Checkpoint::from_bytes(
-        &std::fs::read(&path).map_err(|e| bad(format!("{}: {e}", named.display())))?,
-        named,
-    )
-    .map_err(|e| bad(e.to_string()))?;
+    let (ck, named) = match loaded {
+        Some(loaded) => loaded,
+        None => (
+            Checkpoint::load(&path).map_err(|e| bad(e.to_string()))?,
+            path,
+        ),
+    };
+    let named = named.as_path();
     let scene = ck.scene(named).map_err(|e| bad(e.to_string()))?;
     let model = validate(&scene, &named.display().to_string(), None)?;
     let mut marks: OutputMarks = serde_json::from_str(&ck.client).map_err(|e| {
@@ -682,29 +686,28 @@ impl Job {
         });
         match outcome {
             Ok(true) => {
+                // This process's settling (none on resume, where it was done before).
                 if let Some(done) = self.sim.settling() {
+                    let seconds = began.elapsed().as_secs_f64();
                     self.marks.settling = Some(SettlingSummary {
                         static_steps: done.steps,
                         converged: done.converged,
-                        seconds: began.elapsed().as_secs_f64(),
+                        seconds,
                     });
-                }
-                if let Some(done) = self.sim.settling()
-                    && !self.quiet
-                {
-                    let line = format!(
-                        "settled in {} static steps{} ({:.3} s)",
-                        done.steps,
-                        if done.converged {
-                            ""
-                        } else {
-                            ", stopped without converging"
-                        },
-                        began.elapsed().as_secs_f64()
-                    );
-                    match bar {
-                        Some(bar) => bar.println(line),
-                        None => eprintln!("{line}"),
+                    if !self.quiet {
+                        let line = format!(
+                            "settled in {} static steps{} ({seconds:.3} s)",
+                            done.steps,
+                            if done.converged {
+                                ""
+                            } else {
+                                ", stopped without converging"
+                            },
+                        );
+                        match bar {
+                            Some(bar) => bar.println(line),
+                            None => eprintln!("{line}"),
+                        }
                     }
                 }
                 End::Done
