@@ -696,12 +696,17 @@ impl Job {
                     });
                     if !self.quiet {
                         let line = format!(
-                            "settled in {} static steps{} ({seconds:.3} s)",
+                            "settled in {} static steps{}, solved {} ({seconds:.3} s)",
                             done.steps,
                             if done.converged {
                                 ""
                             } else {
                                 ", stopped without converging"
+                            },
+                            if done.iterative {
+                                "iteratively"
+                            } else {
+                                "directly"
                             },
                         );
                         match bar {

@@ -175,6 +175,25 @@ fn slides_for(text: &str, u: DVec2, slope: f64, phi: f64, duration: Option<f64>)
         .collect()
 }
 
+/// A stack's settling takes the solve its scene names, and the direct one under
+/// `solver = "auto"` (a few blocks, below `SETTLE_ITERATIVE_FROM_BLOCKS`).
+#[test]
+fn the_settling_takes_the_solve_its_scene_names() {
+    for (key, iterative) in [
+        ("", false),
+        ("solver = \"direct\"", false),
+        ("solver = \"iterative\"", true),
+    ] {
+        let (text, _) = stack(2, 1, false, 40.0, 30.0, key);
+        let text = text.replace("duration = 0.5", "duration = 0.001");
+        let (_, model) = Scene::parse(&text, Format::Toml, "stack.toml").unwrap();
+        let mut sim = Simulation::new(model, RunOptions::default());
+        sim.run(|_, _| {}).unwrap();
+        let settled = sim.settling().expect("the stack settles");
+        assert_eq!(settled.iterative, iterative, "`{key}`");
+    }
+}
+
 /// Asserts every block of the stack (or wall) of [`stack`] within 1% of the closed form
 /// after its run.
 fn stack_slides_as_one_body(

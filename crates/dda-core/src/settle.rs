@@ -10,7 +10,10 @@
 //! static steps of a copy of the model under the scene's own joints: each is a step of
 //! the run from rest (static: the velocities reset, so nothing rings), of the run's own
 //! size dt, or longer where the inertia 2 m / dt^2 of the heaviest block would exceed
-//! a hundredth of the penalty ([`SETTLE_INERTIA`]). Stiff modes (the contact springs)
+//! a hundredth of the penalty ([`SETTLE_INERTIA`]), solved directly under `solver =
+//! "auto"` below [`crate::iterative::SETTLE_ITERATIVE_FROM_BLOCKS`] free blocks (such a
+//! step is stiff, which costs conjugate gradients many iterations and a factor nothing).
+//! Stiff modes (the contact springs)
 //! converge in a few such steps, to the forces that balance the weight, the loads and
 //! the inertia of the motion the blocks start (d'Alembert): those of a joint that
 //! holds, and of one that slides (friction at its limit, the normal force of the
@@ -51,6 +54,7 @@
 
 use crate::contact_law::DECISION_BAND;
 use crate::diagnosis::SimError;
+use crate::iterative::settling_solver;
 use crate::model::supported_blocks;
 use crate::scene::{Integration, Mode};
 use crate::simulation::{RunOptions, Simulation};
@@ -167,6 +171,9 @@ pub struct Settling {
     /// after 200 steps without progress, or at its most steps, 2,000 in all
     /// (docs/method.md section 13).
     pub converged: bool,
+    /// Whether its static steps were solved iteratively (else directly:
+    /// [`crate::iterative::settling_solver`]).
+    pub iterative: bool,
 }
 
 impl Simulation {
@@ -225,6 +232,7 @@ impl Simulation {
             .collect();
         let supported = supported_blocks(&model.blocks, p.d_tol, &tied);
         let mut heaviest = 0.0f64;
+        let mut n_free = 0;
         for (i, (b, s)) in model.blocks.iter_mut().zip(&supported).enumerate() {
             // Excavated in the run, not while settling (the blocks removed at t = 0 are
             // gone from both).
@@ -237,6 +245,7 @@ impl Simulation {
             }
             if !b.fixed {
                 heaviest = heaviest.max(self.block_mass(i));
+                n_free += 1;
             }
         }
         if heaviest == 0.0 {
@@ -251,6 +260,7 @@ impl Simulation {
         mp.impact_steps = None;
         mp.integration = Integration::ConstantAcceleration;
         mp.settle = false;
+        mp.solver = settling_solver(mp.solver, n_free);
         model.ground = None;
         for b in &mut model.bolts {
             // A bolt breaks in the run, not while the blocks settle onto it.
@@ -279,6 +289,7 @@ impl Simulation {
         let mut report = Settling {
             steps: round.steps,
             converged: round.converged,
+            iterative: settling.solves_iteratively(),
         };
         // Each block's translation since the settling began.
         let mut moved = round.slide.clone();
