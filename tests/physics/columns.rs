@@ -36,3 +36,47 @@ fn two_set_columns_collapse_permissibly_with_every_detector() {
         }
     }
 }
+
+/// One step of the paper's 20-block column (elastic blocks stacked on a fixed base, from
+/// rest) solved iteratively moves every vertex to within the iterative solve's stated
+/// bound of the direct solve's motion, 1e-8 d_tol (`ITERATIVE_TOLERANCE`,
+/// docs/method.md section 14: stated in each block's own terms of K, inertia, elasticity
+/// and fixed points, a lower bound of K), plus the rounding of the coordinates; the
+/// open-close iteration takes the same decisions both ways.
+#[test]
+fn one_step_solved_iteratively_lies_within_its_bound_of_the_direct_step() {
+    use dda::core::iterative::ITERATIVE_TOLERANCE;
+    use dda::core::scene::SolverChoice;
+    let step = |solver| {
+        let mut scene = dda::bench::builtin("paper-5.1a-column-20").unwrap();
+        scene.analysis.solver = Some(solver);
+        let model = scene.validate().unwrap();
+        let d_tol = model.params.d_tol;
+        let mut sim = Simulation::new(model, RunOptions::default());
+        let record = sim.step().unwrap();
+        assert_eq!(sim.solves_iteratively(), solver == SolverChoice::Iterative);
+        let vertices: Vec<_> = sim
+            .blocks()
+            .iter()
+            .flat_map(|b| b.polygon.vertices().to_vec())
+            .collect();
+        (record, vertices, d_tol)
+    };
+    let (direct, at_direct, d_tol) = step(SolverChoice::Direct);
+    let (iterative, at_iterative, _) = step(SolverChoice::Iterative);
+    assert_eq!((direct.oci, direct.cuts), (iterative.oci, iterative.cuts));
+    let bound = ITERATIVE_TOLERANCE * d_tol;
+    let mut worst = 0.0f64;
+    for (a, b) in at_direct.iter().zip(&at_iterative) {
+        // The rounding of a coordinate of the size of the column's (metres).
+        let rounding = 8.0 * f64::EPSILON * a.length().max(1.0);
+        let off = (*a - *b).length();
+        assert!(
+            off <= bound + rounding,
+            "a vertex {off:e} m apart, bound {bound:e} m"
+        );
+        worst = worst.max(off);
+    }
+    // The solves differ at all: the comparison is not of one solve with itself.
+    assert!(worst > 0.0);
+}

@@ -71,35 +71,30 @@ pub fn settling_solver(choice: SolverChoice, n_free: usize) -> SolverChoice {
 
 impl Simulation {
     /// Solves the assembled system iteratively. At the attempt's first solve the start
-    /// is each block's velocity times dt and the stop's data are made: each block's
-    /// inertia term (c / dt^2 M, with c = 2 under Shi's rule and 4 under the average
-    /// acceleration) and the largest reach of a vertex (see `solver::iterative`). Later
-    /// solves of the attempt start from the last solution.
+    /// is each block's velocity times dt and the stop's data are made: each block's own
+    /// terms of K (its inertia c / dt^2 M, with c = 2 under Shi's rule and 4 under the
+    /// average acceleration, its elasticity and its fixed points: the lower bound of K
+    /// the stop is stated in) and the largest reach of a vertex (see
+    /// `solver::iterative`). Later solves of the attempt start from the last solution.
     pub(crate) fn solve_iteratively(&mut self) -> Iterated {
         let nd = self.nd;
         if !self.scratch.iteration_ready {
             self.scratch.iteration_ready = true;
             let dt = self.scratch.attempt_dt;
-            let c = self.step_rule().inertia_factor(dt);
-            let mut inertia = Vec::with_capacity(self.free_blocks.len());
             let mut reach = 0.0f64;
             for (f, &i) in self.free_blocks.iter().enumerate() {
-                let m: Mat6 = std::array::from_fn(|a| {
-                    std::array::from_fn(|b| c * self.scratch.mass[f][a][b])
-                });
                 let shape = &self.scratch.shapes[i as usize];
-                if let Some(l) = chol(&m, nd) {
+                if let Some(l) = chol(&self.scratch.base_k[f], nd) {
                     for &v in &shape.vertices {
                         reach = reach.max(vertex_reach(&l, nd, &t_rows(v, shape.centroid)));
                     }
                 }
-                inertia.push(m);
                 let v = self.state.blocks[i as usize].velocity;
                 let start: [f64; 6] = std::array::from_fn(|k| v[k] * dt);
                 self.scratch.system.set_start(f as u32, &start);
             }
             self.scratch.reach = reach;
-            self.scratch.system.set_inertia(&inertia);
+            self.scratch.system.set_lower_bound(&self.scratch.base_k);
         }
         let tol = ITERATIVE_TOLERANCE * self.model.params.d_tol;
         self.scratch
@@ -108,9 +103,9 @@ impl Simulation {
     }
 }
 
-/// The largest eigenvalue of T I^-1 T^T for a vertex's two rows T and the Cholesky
-/// factor `l` of a block's inertia term I: how far the vertex can move per unit of the
-/// block's inertia-weighted error.
+/// The largest eigenvalue of T K_o^-1 T^T for a vertex's two rows T and the Cholesky
+/// factor `l` of a block's own terms K_o: how far the vertex can move per unit of the
+/// block's error weighted by them.
 fn vertex_reach(l: &Mat6, nd: usize, rows: &[Vec6; 2]) -> f64 {
     // y_k = L^-1 t_k; then the 2 x 2 Gram matrix of y_0 and y_1.
     let (mut y0, mut y1) = (rows[0], rows[1]);

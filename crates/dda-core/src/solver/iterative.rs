@@ -2,16 +2,18 @@
 //! inverses of the blocks' diagonal terms (block Jacobi), started from a guess of the
 //! motion, and stopped by a bound on the motion's error rather than on the force.
 //!
-//! The bound: every term of K but the inertia (elasticity, contact and fixed-point
-//! springs) is positive semi-definite, so K >= I, the block-diagonal inertia (c/dt^2 M).
-//! For the error e = K^-1 r of the current iterate, with residual r,
-//! e^T I e <= e^T K e = r^T K^-1 r <= r^T I^-1 r =: B. Each block's share of the left side
-//! is at most B, so a point of block b moves in error by at most sqrt(reach_b B), with
-//! reach_b the largest eigenvalue of T I_b^-1 T^T over the block's vertices (T the
-//! displacement rows of a point). The solve stops when the largest reach times B is
+//! The bound: K = K_o + S, with K_o block-diagonal, each block's own terms (its inertia
+//! c/dt^2 M, elasticity and fixed-point springs; symmetric positive definite), and S
+//! the springs and bolts between blocks, positive semi-definite; so K >= K_o. For the
+//! error e = K^-1 r of the current iterate, with residual r,
+//! e^T K_o e <= e^T K e = r^T K^-1 r <= r^T K_o^-1 r =: B. Each block's share of the left
+//! side is at most B, so a point of block b moves in error by at most sqrt(reach_b B),
+//! with reach_b the largest eigenvalue of T K_o,b^-1 T^T over the block's vertices (T
+//! the displacement rows of a point). The solve stops when the largest reach times B is
 //! within the tolerance squared: a stated bound on every vertex's motion, whatever the
-//! conditioning. Since the diagonal blocks D of K exceed I too, r . D^-1 r <= B, so B is
-//! computed only once the iteration's own r . D^-1 r allows it.
+//! conditioning. Since the diagonal blocks D of K exceed K_o too, r . D^-1 r <= B, so B
+//! is computed only once the iteration's own r . D^-1 r allows it. (Until 2026-11-27 K_o
+//! was the inertia alone: 2% to 4% more iterations, `docs/scaling.md`.)
 //!
 //! Every pass over the blocks (the products with K, the preconditioner, the updates of
 //! the iterate) is taken in two halves of the blocks ([`Phase`]), on two threads when
@@ -49,13 +51,14 @@ impl BlockSystem {
         self.x[p * nd..(p + 1) * nd].copy_from_slice(&d[..nd]);
     }
 
-    /// Sets each block's inertia term (in block order, its leading `nd` x `nd` part
-    /// read), the lower bound of K that the iterative solve's stop is stated in; kept
-    /// until set again (it changes with dt and the blocks' shapes, once an attempt).
-    pub fn set_inertia(&mut self, inertia: &[Mat6]) {
+    /// Sets each block's own terms of K (in block order, its leading `nd` x `nd` part
+    /// read: symmetric positive definite, and K minus them positive semi-definite), the
+    /// lower bound of K that the iterative solve's stop is stated in; kept until set
+    /// again (it changes with dt and the blocks' shapes, once an attempt).
+    pub fn set_lower_bound(&mut self, own: &[Mat6]) {
         let nd = self.nd;
         self.metric.resize(self.nb, [0.0; 21]);
-        for (b, m) in inertia.iter().enumerate().take(self.nb) {
+        for (b, m) in own.iter().enumerate().take(self.nb) {
             let p = self.pos[b] as usize;
             self.metric[p] = inverse_of(m, nd);
         }
@@ -64,8 +67,8 @@ impl BlockSystem {
     /// Solves K x = F by preconditioned conjugate gradients from the start in place (see
     /// [`BlockSystem::set_start`]; else the last solution), until every vertex's motion is
     /// within `tol` of the exact solution's by the bound of this module, or `max_iter`
-    /// iterations. `reach` is the largest of the blocks' reaches, for the inertia of
-    /// [`BlockSystem::set_inertia`]. The solution is read with
+    /// iterations. `reach` is the largest of the blocks' reaches, for the terms of
+    /// [`BlockSystem::set_lower_bound`]. The solution is read with
     /// [`BlockSystem::solution`] either way.
     pub fn solve_iterative(&mut self, reach: f64, tol: f64, max_iter: u32) -> Iterated {
         let (nb, nd) = (self.nb, self.nd);
@@ -825,7 +828,7 @@ mod tests {
             let fi: Vec6 = std::array::from_fn(|a| if a < nd { f[i * nd + a] } else { 0.0 });
             sys.add_rhs(i as u32, 1.0, &fi);
         }
-        sys.set_inertia(&inertia);
+        sys.set_lower_bound(&inertia);
         (sys, inertia, dense_solve(dense, f))
     }
 
