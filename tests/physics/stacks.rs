@@ -194,6 +194,42 @@ fn the_settling_takes_the_solve_its_scene_names() {
     }
 }
 
+/// Under `solver = "auto"` a settling whose direct factor would not fit in the memory
+/// allowed is begun again iteratively (the run, solved directly here, then stops for
+/// want of memory itself); a direct solve the scene names is not replaced.
+#[test]
+fn a_settling_without_memory_for_its_factor_settles_iteratively_under_auto() {
+    let options = RunOptions {
+        max_memory: Some(1024),
+        ..RunOptions::default()
+    };
+    for (key, falls_back) in [("", true), ("solver = \"direct\"", false)] {
+        let (text, _) = stack(2, 1, false, 40.0, 30.0, key);
+        let (_, model) = Scene::parse(&text, Format::Toml, "stack.toml").unwrap();
+        let mut sim = Simulation::new(model, options);
+        let error = sim.step().unwrap_err();
+        let said = error.to_string();
+        assert!(said.contains("more than"), "`{key}`: {said}");
+        match sim.settling() {
+            Some(settled) => {
+                assert!(falls_back, "`{key}` settled");
+                assert!(settled.iterative);
+                assert!(
+                    matches!(error, dda::core::SimError::Solve { .. }),
+                    "the run's own solve: {said}"
+                );
+            }
+            None => {
+                assert!(!falls_back, "`{key}` did not settle: {said}");
+                assert!(
+                    matches!(error, dda::core::SimError::Settle { .. }),
+                    "{said}"
+                );
+            }
+        }
+    }
+}
+
 /// Asserts every block of the stack (or wall) of [`stack`] within 1% of the closed form
 /// after its run.
 fn stack_slides_as_one_body(

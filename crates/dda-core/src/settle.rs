@@ -56,8 +56,9 @@ use crate::contact_law::DECISION_BAND;
 use crate::diagnosis::SimError;
 use crate::iterative::settling_solver;
 use crate::model::supported_blocks;
-use crate::scene::{Integration, Mode};
+use crate::scene::{Integration, Mode, Model, SolverChoice};
 use crate::simulation::{RunOptions, Simulation};
+use crate::solver::SolveError;
 use dda_contact::BlockShape;
 use dda_geom::{DVec2, Groups, displace_point};
 
@@ -270,81 +271,27 @@ impl Simulation {
             stop_on_violation: false,
             ..self.options
         };
-        let mut settling = Simulation::new(model, options);
-        // The first static step's inertia is the penalty: from rest, no block moves further
-        // in it than its contact springs give under its weight, so no joint slides far
-        // before its normal force is loaded. The steps then grow by the run's rule for easy
-        // steps (docs/method.md section 7) to the settling's own.
-        settling.state.dt = first;
-        // Blocks written resting on each other touch along flush faces, where a contact
-        // starts open: closed from the start, they carry their weight in the first step,
-        // where each open-close iteration would otherwise close one more layer of a
-        // stack (the layers above falling with it) and a tall stack runs out of them.
-        settling.close_touching = true;
-        let supplied = settling.state.energy.supplied;
-        let mut round = settling.relax(SETTLE_MAX_STEPS, None, None, 0, watch)?;
-        if round.interrupted {
+        // Under `auto` the direct solve settles a scene the run may solve iteratively, for
+        // want of memory among other reasons: where its factor would not fit, the
+        // settling is begun again iteratively.
+        let fallback = self.model.params.solver == SolverChoice::Auto
+            && model.params.solver == SolverChoice::Direct;
+        let settled = match self.settle_copy(model.clone(), options, first, watch) {
+            Err(SimError::Solve {
+                source: SolveError::OutOfMemory { .. },
+                ..
+            }) if fallback => {
+                model.params.solver = SolverChoice::Iterative;
+                self.settle_copy(model, options, first, watch)
+            }
+            other => other,
+        }
+        .map_err(|e| SimError::Settle {
+            reason: e.to_string(),
+        })?;
+        let Some((settling, report, supplied)) = settled else {
             return Ok(false);
-        }
-        let mut report = Settling {
-            steps: round.steps,
-            converged: round.converged,
-            iterative: settling.solves_iteratively(),
         };
-        // Each block's translation since the settling began.
-        let mut moved = round.slide.clone();
-        for _ in 1..SETTLE_ROUNDS {
-            if !round.converged {
-                break;
-            }
-            // A round after a rewind has at most the steps the rounds before it took; one
-            // that does not converge in them leaves the blocks where they had settled.
-            let settled = (settling.state.clone(), moved.clone());
-            if !settling.rewind(&round, &mut moved, report.steps) {
-                break;
-            }
-            let budget = report.steps.min(SETTLE_MAX_STEPS - report.steps);
-            let next = settling.relax(budget, Some(round.scale), None, report.steps, watch)?;
-            if next.interrupted {
-                return Ok(false);
-            }
-            report.steps += next.steps;
-            if !next.converged {
-                (settling.state, moved) = settled;
-                break;
-            }
-            for (m, s) in moved.iter_mut().zip(&next.slide) {
-                *m += *s;
-            }
-            round = next;
-        }
-        // The last round's slide is taken back too, and one more step loads the contacts
-        // where the run starts. That step must move as the round's last did: otherwise
-        // the way back was not the blocks' steady slide, and it is undone.
-        if round.converged {
-            let settled = settling.state.clone();
-            if settling.rewind(&round, &mut moved, report.steps) {
-                let check =
-                    settling.relax(1, Some(round.scale), Some(&round.last), report.steps, watch)?;
-                if check.interrupted {
-                    return Ok(false);
-                }
-                report.steps += check.steps;
-                // False for a step not taken (infinite) or of no motion (NaN).
-                let confirmed = check.change <= SETTLE_CHECK;
-                if confirmed {
-                    // The check step slid as the round's last did: one step of the steady
-                    // motion, taken back as the rounds' were where each group moved as one
-                    // in it, so that its contacts keep their loads.
-                    let steady = settling.group_translations(&check.steady);
-                    if settling.moved_as_groups(&check.steady, &steady) {
-                        settling.move_back(&steady, 1.0, &mut moved);
-                    }
-                } else {
-                    settling.state = settled;
-                }
-            }
-        }
         // The settled places, stresses and contacts; the run's own velocities.
         for (i, (b, settled)) in self
             .state
@@ -386,6 +333,95 @@ impl Simulation {
         Ok(true)
     }
 
+    /// The static steps of [`Simulation::settle`] on `model`, its copy of the scene for
+    /// settling (see the module docs), from a first step of `first` seconds: the settled
+    /// copy, what it did, and the energy supplied before it began; None if `watch`
+    /// stopped it. A step's error is returned as it came.
+    fn settle_copy(
+        &self,
+        model: Model,
+        options: RunOptions,
+        first: f64,
+        watch: &mut dyn FnMut(&SettleProgress) -> bool,
+    ) -> Result<Option<(Simulation, Settling, f64)>, SimError> {
+        let mut settling = Simulation::new(model, options);
+        // The first static step's inertia is the penalty: from rest, no block moves further
+        // in it than its contact springs give under its weight, so no joint slides far
+        // before its normal force is loaded. The steps then grow by the run's rule for easy
+        // steps (docs/method.md section 7) to the settling's own.
+        settling.state.dt = first;
+        // Blocks written resting on each other touch along flush faces, where a contact
+        // starts open: closed from the start, they carry their weight in the first step,
+        // where each open-close iteration would otherwise close one more layer of a
+        // stack (the layers above falling with it) and a tall stack runs out of them.
+        settling.close_touching = true;
+        let supplied = settling.state.energy.supplied;
+        let mut round = settling.relax(SETTLE_MAX_STEPS, None, None, 0, watch)?;
+        if round.interrupted {
+            return Ok(None);
+        }
+        let mut report = Settling {
+            steps: round.steps,
+            converged: round.converged,
+            iterative: settling.solves_iteratively(),
+        };
+        // Each block's translation since the settling began.
+        let mut moved = round.slide.clone();
+        for _ in 1..SETTLE_ROUNDS {
+            if !round.converged {
+                break;
+            }
+            // A round after a rewind has at most the steps the rounds before it took; one
+            // that does not converge in them leaves the blocks where they had settled.
+            let settled = (settling.state.clone(), moved.clone());
+            if !settling.rewind(&round, &mut moved, report.steps) {
+                break;
+            }
+            let budget = report.steps.min(SETTLE_MAX_STEPS - report.steps);
+            let next = settling.relax(budget, Some(round.scale), None, report.steps, watch)?;
+            if next.interrupted {
+                return Ok(None);
+            }
+            report.steps += next.steps;
+            if !next.converged {
+                (settling.state, moved) = settled;
+                break;
+            }
+            for (m, s) in moved.iter_mut().zip(&next.slide) {
+                *m += *s;
+            }
+            round = next;
+        }
+        // The last round's slide is taken back too, and one more step loads the contacts
+        // where the run starts. That step must move as the round's last did: otherwise
+        // the way back was not the blocks' steady slide, and it is undone.
+        if round.converged {
+            let settled = settling.state.clone();
+            if settling.rewind(&round, &mut moved, report.steps) {
+                let check =
+                    settling.relax(1, Some(round.scale), Some(&round.last), report.steps, watch)?;
+                if check.interrupted {
+                    return Ok(None);
+                }
+                report.steps += check.steps;
+                // False for a step not taken (infinite) or of no motion (NaN).
+                let confirmed = check.change <= SETTLE_CHECK;
+                if confirmed {
+                    // The check step slid as the round's last did: one step of the steady
+                    // motion, taken back as the rounds' were where each group moved as one
+                    // in it, so that its contacts keep their loads.
+                    let steady = settling.group_translations(&check.steady);
+                    if settling.moved_as_groups(&check.steady, &steady) {
+                        settling.move_back(&steady, 1.0, &mut moved);
+                    }
+                } else {
+                    settling.state = settled;
+                }
+            }
+        }
+        Ok(Some((settling, report, supplied)))
+    }
+
     /// One round of settling: static steps until the motion converges (see the module
     /// docs), for at most `budget` steps; `scale`, the largest motion of the settling's
     /// first step (over dt^2 / 2), once known. `watch` is told of every step (`done`
@@ -421,9 +457,7 @@ impl Simulation {
             }
             report.steps = n;
             let before = self.free_vertices();
-            let record = self.step().map_err(|e| SimError::Settle {
-                reason: e.to_string(),
-            })?;
+            let record = self.step()?;
             let per = 2.0 / (record.dt * record.dt);
             let motion: Vec<DVec2> = self
                 .free_vertices()
