@@ -22,6 +22,7 @@ use dda::report::{
     BOLTS_HEADER, Frame, HISTORY_HEADER, MEASUREMENTS_HEADER, bolt_rows, frame_resolution,
     frame_view, history_row, measurement_rows,
 };
+use dda_core::scene::SolverChoice;
 use dda_core::{Checkpoint, RunOptions, Scene, SettlingSummary, Simulation, Summary};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
@@ -690,6 +691,11 @@ impl Job {
                 if let Some(done) = self.sim.settling() {
                     let seconds = began.elapsed().as_secs_f64();
                     self.marks.settling = Some(SettlingSummary {
+                        solver: Some(if done.iterative {
+                            SolverChoice::Iterative
+                        } else {
+                            SolverChoice::Direct
+                        }),
                         static_steps: done.steps,
                         converged: done.converged,
                         seconds,

@@ -130,7 +130,10 @@ fn run_writes_summary_history_and_frames() {
     assert!(settling["static_steps"].as_u64().unwrap() > 0, "{settling}");
     assert!(settling["converged"].is_boolean(), "{settling}");
     assert!(settling["seconds"].as_f64().unwrap() >= 0.0, "{settling}");
+    // A few blocks under `auto`: settled by the direct solve.
+    assert_eq!(settling["solver"], "direct", "{settling}");
     assert!(report.contains("settling before t = 0"));
+    assert!(report.contains("solved directly"));
     assert_eq!(s["blocks"][1]["id"], "slider");
     let history = std::fs::read_to_string(out.join("history.csv")).unwrap();
     let mut lines = history.lines();

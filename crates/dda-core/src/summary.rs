@@ -1,6 +1,7 @@
 //! The run summary (docs/outputs.md): the fields other tools read, plus a few more. Timing
 //! fields live under `seconds` so that comparisons of two runs can leave them out.
 
+use crate::scene::SolverChoice;
 use crate::simulation::Simulation;
 use serde::{Deserialize, Serialize};
 
@@ -118,6 +119,11 @@ pub struct SettlingSummary {
     pub converged: bool,
     /// Wall time it took, s.
     pub seconds: f64,
+    /// How its static steps were solved, `direct` or `iterative` (`analysis.solver`;
+    /// under `auto` directly below 10,000 free blocks: docs/method.md section 13).
+    /// Absent in the record of a run begun before it was kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub solver: Option<SolverChoice>,
 }
 
 /// A bolt at the end of a run.

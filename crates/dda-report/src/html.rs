@@ -4,6 +4,7 @@
 //! effects and parameters used.
 
 use super::{Frame, escape, plot};
+use dda_core::scene::SolverChoice;
 use dda_core::{Model, Scene, Summary};
 use dda_geom::Aabb;
 use std::fmt::Write as _;
@@ -347,13 +348,18 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
             "settling before t = 0 (static steps, wall seconds)",
             match s.settling {
                 Some(st) => format!(
-                    "{}, {:.3}{}",
+                    "{}, {:.3}{}{}",
                     st.static_steps,
                     st.seconds,
                     if st.converged {
                         ""
                     } else {
                         "; stopped without converging"
+                    },
+                    match st.solver {
+                        Some(SolverChoice::Direct) => "; solved directly",
+                        Some(SolverChoice::Iterative) => "; solved iteratively",
+                        _ => "",
                     }
                 ),
                 None => "none".into(),
