@@ -22,7 +22,6 @@ use dda::report::{
     BOLTS_HEADER, Frame, HISTORY_HEADER, MEASUREMENTS_HEADER, bolt_rows, frame_resolution,
     frame_view, history_row, measurement_rows,
 };
-use dda_core::scene::SolverChoice;
 use dda_core::{Checkpoint, RunOptions, Scene, SettlingSummary, Simulation, Summary};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
@@ -691,11 +690,7 @@ impl Job {
                 if let Some(done) = self.sim.settling() {
                     let seconds = began.elapsed().as_secs_f64();
                     self.marks.settling = Some(SettlingSummary {
-                        solver: Some(if done.iterative {
-                            SolverChoice::Iterative
-                        } else {
-                            SolverChoice::Direct
-                        }),
+                        solver: Some(done.solver),
                         static_steps: done.steps,
                         converged: done.converged,
                         seconds,
@@ -709,11 +704,7 @@ impl Job {
                             } else {
                                 ", stopped without converging"
                             },
-                            if done.iterative {
-                                "iteratively"
-                            } else {
-                                "directly"
-                            },
+                            done.solver.adverb(),
                         );
                         match bar {
                             Some(bar) => bar.println(line),

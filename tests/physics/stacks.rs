@@ -6,6 +6,7 @@
 
 use crate::statics::{Brick, tipping_friction_deg};
 use dda::bench::{Layout, Masonry};
+use dda::core::scene::SolverChoice;
 use dda::core::{Format, RunOptions, Scene, Simulation};
 use dda::geom::DVec2;
 
@@ -190,7 +191,11 @@ fn the_settling_takes_the_solve_its_scene_names() {
         let mut sim = Simulation::new(model, RunOptions::default());
         sim.run(|_, _| {}).unwrap();
         let settled = sim.settling().expect("the stack settles");
-        assert_eq!(settled.iterative, iterative, "`{key}`");
+        assert_eq!(
+            settled.solver == SolverChoice::Iterative,
+            iterative,
+            "`{key}`"
+        );
     }
 }
 
@@ -213,7 +218,7 @@ fn a_settling_without_memory_for_its_factor_settles_iteratively_under_auto() {
         match sim.settling() {
             Some(settled) => {
                 assert!(falls_back, "`{key}` settled");
-                assert!(settled.iterative);
+                assert_eq!(settled.solver, SolverChoice::Iterative);
                 assert!(
                     matches!(error, dda::core::SimError::Solve { .. }),
                     "the run's own solve: {said}"

@@ -290,6 +290,18 @@ pub enum SolverChoice {
     Iterative,
 }
 
+impl SolverChoice {
+    /// How a system solved this way is said to be solved: "directly", "iteratively"
+    /// ("as `auto` chooses" before the choice is made).
+    pub fn adverb(self) -> &'static str {
+        match self {
+            SolverChoice::Auto => "as `auto` chooses",
+            SolverChoice::Direct => "directly",
+            SolverChoice::Iterative => "iteratively",
+        }
+    }
+}
+
 /// How a dynamic step integrates the motion (docs/method.md section 12).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]

@@ -172,9 +172,9 @@ pub struct Settling {
     /// after 200 steps without progress, or at its most steps, 2,000 in all
     /// (docs/method.md section 13).
     pub converged: bool,
-    /// Whether its static steps were solved iteratively (else directly:
-    /// [`crate::iterative::settling_solver`]).
-    pub iterative: bool,
+    /// How its static steps were solved, `Direct` or `Iterative`
+    /// ([`crate::iterative::settling_solver`]).
+    pub solver: SolverChoice,
 }
 
 impl Simulation {
@@ -276,20 +276,24 @@ impl Simulation {
         // settling is begun again iteratively.
         let fallback = self.model.params.solver == SolverChoice::Auto
             && model.params.solver == SolverChoice::Direct;
-        let settled = match self.settle_copy(model.clone(), options, first, watch) {
-            Err(SimError::Solve {
-                source: SolveError::OutOfMemory { .. },
-                ..
-            }) if fallback => {
-                model.params.solver = SolverChoice::Iterative;
-                self.settle_copy(model, options, first, watch)
+        let settled = if fallback {
+            match self.settle_copy(model.clone(), options, first, watch) {
+                Err(SimError::Solve {
+                    source: SolveError::OutOfMemory { .. },
+                    ..
+                }) => {
+                    model.params.solver = SolverChoice::Iterative;
+                    self.settle_copy(model, options, first, watch)
+                }
+                other => other,
             }
-            other => other,
+        } else {
+            self.settle_copy(model, options, first, watch)
         }
         .map_err(|e| SimError::Settle {
             reason: e.to_string(),
         })?;
-        let Some((settling, report, supplied)) = settled else {
+        let Some((settling, report, work)) = settled else {
             return Ok(false);
         };
         // The settled places, stresses and contacts; the run's own velocities.
@@ -323,7 +327,6 @@ impl Simulation {
             }
         }
         self.settling = Some(report);
-        let work = settling.state.energy.supplied - supplied;
         self.state.energy.supplied += work;
         self.state.energy.supplied_max = self
             .state
@@ -335,8 +338,8 @@ impl Simulation {
 
     /// The static steps of [`Simulation::settle`] on `model`, its copy of the scene for
     /// settling (see the module docs), from a first step of `first` seconds: the settled
-    /// copy, what it did, and the energy supplied before it began; None if `watch`
-    /// stopped it. A step's error is returned as it came.
+    /// copy, what it did, and the work gravity and the loads did on it (net of the ways
+    /// back); None if `watch` stopped it. A step's error is returned as it came.
     fn settle_copy(
         &self,
         model: Model,
@@ -363,7 +366,11 @@ impl Simulation {
         let mut report = Settling {
             steps: round.steps,
             converged: round.converged,
-            iterative: settling.solves_iteratively(),
+            solver: if settling.solves_iteratively() {
+                SolverChoice::Iterative
+            } else {
+                SolverChoice::Direct
+            },
         };
         // Each block's translation since the settling began.
         let mut moved = round.slide.clone();
@@ -419,7 +426,8 @@ impl Simulation {
                 }
             }
         }
-        Ok(Some((settling, report, supplied)))
+        let work = settling.state.energy.supplied - supplied;
+        Ok(Some((settling, report, work)))
     }
 
     /// One round of settling: static steps until the motion converges (see the module

@@ -4,7 +4,6 @@
 //! effects and parameters used.
 
 use super::{Frame, escape, plot};
-use dda_core::scene::SolverChoice;
 use dda_core::{Model, Scene, Summary};
 use dda_geom::Aabb;
 use std::fmt::Write as _;
@@ -356,11 +355,9 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
                     } else {
                         "; stopped without converging"
                     },
-                    match st.solver {
-                        Some(SolverChoice::Direct) => "; solved directly",
-                        Some(SolverChoice::Iterative) => "; solved iteratively",
-                        _ => "",
-                    }
+                    st.solver
+                        .map(|s| format!("; solved {}", s.adverb()))
+                        .unwrap_or_default()
                 ),
                 None => "none".into(),
             },
