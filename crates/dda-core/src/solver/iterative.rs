@@ -1,6 +1,14 @@
-//! The iterative solve of large systems: conjugate gradients preconditioned by the
-//! inverses of the blocks' diagonal terms (block Jacobi), started from a guess of the
-//! motion, and stopped by a bound on the motion's error rather than on the force.
+//! The iterative solve of large systems: conjugate gradients on the system scaled by
+//! the factors of its diagonal blocks, started from a guess of the motion, and stopped
+//! by a bound on the motion's error rather than on the force.
+//!
+//! The scaling: with each block's diagonal block D_b = L_b L_b^T (Cholesky), CG runs on
+//! (L^-1 K L^-T) (L^T x) = L^-1 F, whose diagonal blocks are the identity. In exact
+//! arithmetic its iterates are those of CG on K preconditioned by D^-1 (block Jacobi),
+//! but an iteration reads neither the diagonal blocks nor their inverses, nor keeps
+//! z = D^-1 r: the scaled couplings (each term s u v^T between blocks a and b becomes
+//! s (L_a^-1 u) (L_b^-1 v)^T, made once a solve) are all a product reads. On the
+//! 111,460-block column an iteration took 4.6 ms against 7.3 ms (`docs/scaling.md`).
 //!
 //! The bound: K = K_o + S, with K_o block-diagonal, each block's own terms (its inertia
 //! c/dt^2 M, elasticity and fixed-point springs; symmetric positive definite), and S
@@ -11,16 +19,18 @@
 //! with reach_b the largest eigenvalue of T K_o,b^-1 T^T over the block's vertices (T
 //! the displacement rows of a point). The solve stops when the largest reach times B is
 //! within the tolerance squared: a stated bound on every vertex's motion, whatever the
-//! conditioning. Since the diagonal blocks D of K exceed K_o too, r . D^-1 r <= B, so B
-//! is computed only once the iteration's own r . D^-1 r allows it. (Until 2026-11-27 K_o
+//! conditioning. The scaled system's residual is r~ = L^-1 r, so r = L r~ for B; and
+//! since the diagonal blocks D of K exceed K_o too, r~ . r~ = r^T D^-1 r <= B, so B is
+//! computed only once the iteration's own r~ . r~ allows it. (Until 2026-11-27 K_o
 //! was the inertia alone: 2% to 4% more iterations, `docs/scaling.md`.)
 //!
-//! Every pass over the blocks (the products with K, the preconditioner, the updates of
-//! the iterate) is taken in two halves of the blocks ([`Phase`]), on two threads when
+//! Every pass over the blocks (the products with the scaled K, the updates of the
+//! iterate) is taken in two halves of the blocks ([`Phase`]), on two threads when
 //! [`BlockSystem::threads`] is set (`team`): each half writes its own rows, in the same
 //! order either way, and the halves' sums are added in a fixed order, so the bits are
 //! the same on one thread or two. A product's rows of one half read the other half's x
-//! or p where a coupling crosses between them.
+//! or p where a coupling crosses between them. The factors and the scaled terms are
+//! made by halves too, each term the same bits whichever thread makes it.
 //!
 //! Measured on matrices of the 826-, 3,472- and 10,131-block columns (cold starts, to a
 //! relative error of 1e-9): 91, 95 and 97 iterations, about the same at every size: the
@@ -28,7 +38,7 @@
 //! of blocks cut the iterations to a half but not the matrix products (`docs/scaling.md`).
 
 use super::BlockSystem;
-use super::team::{Phase, with_team};
+use super::team::{Phase, both, with_team};
 use crate::kinematics::{Mat6, Vec6};
 use std::sync::{PoisonError, RwLock, RwLockReadGuard, RwLockWriteGuard};
 
@@ -83,22 +93,65 @@ impl BlockSystem {
             return it;
         }
         self.seal();
-        // The inverses of the diagonal blocks: the preconditioner D^-1, made again only
-        // for the blocks whose diagonal changed since.
-        let mut diag = std::mem::take(&mut self.diag_inverse);
-        if diag.len() != nb {
-            diag.resize(nb, [0.0; 21]);
+        // The diagonal blocks' factors D_b = L_b L_b^T, made again only for the blocks
+        // whose diagonal changed since.
+        let mut factors = std::mem::take(&mut self.factors);
+        if factors.len() != nb {
+            factors.resize(nb, [0.0; 21]);
             self.stale.fill(true);
         }
-        let mut work = std::mem::take(&mut self.work);
-        work.resize(5 * n, 0.0);
-        let mut x = std::mem::take(&mut self.x);
         let view = self.product_view();
+        // Each half's blocks factorised (on two threads where set); true if all were
+        // positive definite.
+        let factorise = |factors: &mut [Packed], stale: &[bool], first: usize| {
+            let mut definite = true;
+            for (j, (l, &stale)) in factors.iter_mut().zip(stale).enumerate() {
+                if stale {
+                    match cholesky(&view.diagonal_block(first + j), nd) {
+                        Some(f) => *l = f,
+                        None => definite = false,
+                    }
+                }
+            }
+            definite
+        };
+        let half = view.half;
+        let (l0, l1) = factors.split_at_mut(half);
+        let (st0, st1) = self.stale.split_at(half);
+        let mut definite = [true; 2];
+        let [d0, d1] = &mut definite;
+        both(
+            self.threads,
+            || *d1 = factorise(l1, st1, half),
+            || *d0 = factorise(l0, st0, 0),
+        );
+        if definite != [true; 2] {
+            // K is not numerically positive definite: no solve (the blocks whose factor
+            // failed are factorised again at the next solve).
+            self.factors = factors;
+            self.counters.iterative += 1;
+            it.converged = false;
+            it.bound = f64::INFINITY;
+            return it;
+        }
+        // The couplings of the scaled system L^-1 K L^-T, whose diagonal blocks are the
+        // identity.
+        let mut scaled = std::mem::take(&mut self.scaled);
+        self.couplings
+            .scale_into(&factors, nd, self.threads, &mut scaled);
+        let mut work = std::mem::take(&mut self.work);
+        work.resize(4 * n, 0.0);
+        let mut x = std::mem::take(&mut self.x);
+        let view = ProductView {
+            values: None,
+            terms: &scaled,
+            ..self.product_view()
+        };
         let (half, split) = (view.half, view.half * nd);
         // Each half's own vectors, and x and p, which a product reads across the halves,
         // behind a lock per half (each phase only reads or only writes them: the locks
         // are never contended).
-        let [r, z, p, q, w] = split5(&mut work, n);
+        let [f, r, p, q] = split4(&mut work, n);
         let (x0, x1) = x.split_at_mut(split);
         let (p0, p1) = p.split_at_mut(split);
         let shared = Shared {
@@ -106,33 +159,28 @@ impl BlockSystem {
             x: [RwLock::new(x0), RwLock::new(x1)],
             p: [RwLock::new(p0), RwLock::new(p1)],
         };
-        let (d0, d1) = diag.split_at_mut(half);
+        let (l0, l1) = factors.split_at(half);
         let halves = |v| halves(v, split);
-        let ([r0, r1], [z0, z1], [q0, q1], [w0, w1]) = (halves(r), halves(z), halves(q), halves(w));
+        let ([f0, f1], [r0, r1], [q0, q1]) = (halves(f), halves(r), halves(q));
         let (rhs0, rhs1) = self.rhs.split_at(split);
         let (m0, m1) = self.metric.split_at(half.min(self.metric.len()));
-        let (st0, st1) = self.stale.split_at(half);
         let mut first = Half {
             h: 0,
-            diag: d0,
-            stale: st0,
+            factors: l0,
             metric: m0,
             rhs: rhs0,
+            f: f0,
             r: r0,
-            z: z0,
             q: q0,
-            w: w0,
         };
         let mut second = Half {
             h: 1,
-            diag: d1,
-            stale: st1,
+            factors: l1,
             metric: m1,
             rhs: rhs1,
+            f: f1,
             r: r1,
-            z: z1,
             q: q1,
-            w: w1,
         };
         let shared = &shared;
         with_team(
@@ -143,19 +191,20 @@ impl BlockSystem {
                 // The bound on the motion's error of the current residual.
                 let bound =
                     |run: &mut dyn FnMut(Phase) -> f64| (reach * run(Phase::Bound)).max(0.0).sqrt();
-                run(Phase::Invert);
-                let mut rz = run(Phase::Residual);
-                let (mut rz_old, mut restart) = (rz, true);
+                run(Phase::Scale);
+                let mut rr = run(Phase::Residual);
+                let (mut rr_old, mut restart) = (rr, true);
                 loop {
-                    // D >= I (K >= I, block by block on the diagonal), so B = r^T I^-1 r >= r . z:
-                    // B is worth computing only once reach r . z is within the tolerance.
-                    if reach * rz <= tol * tol {
+                    // D >= K_o (block by block on the diagonal), so B = r^T K_o^-1 r >=
+                    // r^T D^-1 r = r~ . r~ (r~ = L^-1 r, the scaled system's residual): B
+                    // is worth computing only once reach r~ . r~ is within the tolerance.
+                    if reach * rr <= tol * tol {
                         it.bound = bound(&mut run);
                         if it.bound <= tol {
                             // The recurrence's residual drifts from the true one: the stop is
                             // confirmed on the true residual, and the directions start again
                             // from it if it fails.
-                            rz = run(Phase::Residual);
+                            rr = run(Phase::Residual);
                             it.bound = bound(&mut run);
                             if it.bound <= tol {
                                 break;
@@ -163,12 +212,12 @@ impl BlockSystem {
                             restart = true;
                         }
                     }
-                    if it.iterations == max_iter || !rz.is_finite() {
+                    if it.iterations == max_iter || !rr.is_finite() {
                         it.converged = false;
                         it.bound = bound(&mut run);
                         break;
                     }
-                    run(Phase::Turn((!restart).then(|| rz / rz_old)));
+                    run(Phase::Turn((!restart).then(|| rr / rr_old)));
                     restart = false;
                     let pq = run(Phase::Product);
                     if pq.is_nan() || pq <= 0.0 {
@@ -176,15 +225,17 @@ impl BlockSystem {
                         it.bound = f64::INFINITY;
                         break;
                     }
-                    let alpha = rz / pq;
-                    rz_old = rz;
-                    rz = run(Phase::Descend(alpha));
+                    let alpha = rr / pq;
+                    rr_old = rr;
+                    rr = run(Phase::Descend(alpha));
                     it.iterations += 1;
                 }
+                run(Phase::Unscale);
             },
         );
         self.stale.fill(false);
-        self.diag_inverse = diag;
+        self.factors = factors;
+        self.scaled = scaled;
         self.work = work;
         self.x = x;
         self.counters.iterative += 1;
@@ -205,8 +256,9 @@ impl BlockSystem {
             nd: self.nd,
             nb: self.nb,
             half: self.nb / 2,
-            values: &self.values,
+            values: Some(&self.values),
             couplings: &self.couplings,
+            terms: &self.couplings.terms,
             col_start: &self.col_start,
             entry_col: &self.entry_col,
         }
@@ -225,13 +277,12 @@ impl BlockSystem {
     }
 }
 
-/// The five work vectors of an iterative solve, `n` values each.
-fn split5(work: &mut [f64], n: usize) -> [&mut [f64]; 5] {
-    let (r, rest) = work.split_at_mut(n);
-    let (z, rest) = rest.split_at_mut(n);
-    let (p, rest) = rest.split_at_mut(n);
-    let (q, w) = rest.split_at_mut(n);
-    [r, z, p, q, w]
+/// The four work vectors of an iterative solve, `n` values each.
+fn split4(work: &mut [f64], n: usize) -> [&mut [f64]; 4] {
+    let (f, rest) = work.split_at_mut(n);
+    let (r, rest) = rest.split_at_mut(n);
+    let (p, q) = rest.split_at_mut(n);
+    [f, r, p, q]
 }
 
 /// `v` split after its first `split` values.
@@ -262,51 +313,85 @@ struct Shared<'a> {
     p: Locked<'a>,
 }
 
-/// One half of the blocks' own part of a solve: its preconditioner, which of its
-/// diagonal blocks changed, its inertia inverses, right-hand side and work vectors.
+/// One half of the blocks' own part of a solve: the factors of its diagonal blocks,
+/// the inverses of its blocks' own terms (the bound), its right-hand side and work
+/// vectors (the scaled system's right-hand side, residual and product).
 struct Half<'a> {
     h: usize,
-    diag: &'a mut [Packed],
-    stale: &'a [bool],
+    factors: &'a [Packed],
     metric: &'a [Packed],
     rhs: &'a [f64],
+    f: &'a mut [f64],
     r: &'a mut [f64],
-    z: &'a mut [f64],
     q: &'a mut [f64],
-    w: &'a mut [f64],
 }
 
 impl Half<'_> {
     /// Runs `phase` over this half (see [`Phase`]); returns its sum.
     fn run(&mut self, phase: Phase, shared: &Shared) -> f64 {
         let view = &shared.view;
-        let nd = view.nd;
+        match view.nd {
+            6 => self.run_nd::<6>(phase, shared),
+            3 => self.run_nd::<3>(phase, shared),
+            nd => unreachable!("blocks of {nd} unknowns"),
+        }
+    }
+
+    /// [`Half::run`] for blocks of `ND` unknowns.
+    fn run_nd<const ND: usize>(&mut self, phase: Phase, shared: &Shared) -> f64 {
+        let view = &shared.view;
         match phase {
-            Phase::Invert => {
-                let first = self.h * view.half;
-                for (j, (d, &stale)) in self.diag.iter_mut().zip(self.stale).enumerate() {
-                    if stale {
-                        *d = inverse_of(&view.diagonal_block(first + j), nd);
-                    }
+            Phase::Scale => {
+                // f~ = L^-1 F, x~ = L^T x.
+                let mut x = write_own(&shared.x, self.h);
+                for (b, l) in self.factors.iter().enumerate() {
+                    let fb = block_mut::<ND>(self.f, b);
+                    fb.copy_from_slice(block::<ND>(self.rhs, b));
+                    lower_solve(l, fb);
+                    upper_mul(l, block_mut::<ND>(&mut x, b));
+                }
+                0.0
+            }
+            Phase::Unscale => {
+                // x = L^-T x~.
+                let mut x = write_own(&shared.x, self.h);
+                for (b, l) in self.factors.iter().enumerate() {
+                    upper_solve(l, block_mut::<ND>(&mut x, b));
                 }
                 0.0
             }
             Phase::Residual => {
                 let x = read_both(&shared.x);
                 view.product(self.h, [&x[0], &x[1]], self.q);
-                for ((ri, fi), qi) in self.r.iter_mut().zip(self.rhs).zip(self.q.iter()) {
+                let mut rr = 0.0;
+                for ((ri, fi), qi) in self.r.iter_mut().zip(self.f.iter()).zip(self.q.iter()) {
                     *ri = fi - qi;
+                    rr += *ri * *ri;
                 }
-                apply_nd(self.diag, nd, self.r, self.z)
+                rr
             }
-            Phase::Bound => apply_nd(self.metric, nd, self.r, self.w),
+            Phase::Bound => {
+                // r = L r~, and r^T K_o^-1 r.
+                let mut sum = 0.0;
+                for ((l, m), rb) in self
+                    .factors
+                    .iter()
+                    .zip(self.metric)
+                    .zip(self.r.chunks_exact(ND))
+                {
+                    let mut t: [f64; ND] = *block::<ND>(rb, 0);
+                    lower_mul(l, &mut t);
+                    sum += quadratic(m, &t);
+                }
+                sum
+            }
             Phase::Turn(beta) => {
                 let mut p = write_own(&shared.p, self.h);
                 match beta {
-                    None => p.copy_from_slice(self.z),
+                    None => p.copy_from_slice(self.r),
                     Some(beta) => {
-                        for (pi, zi) in p.iter_mut().zip(self.z.iter()) {
-                            *pi = zi + beta * *pi;
+                        for (pi, ri) in p.iter_mut().zip(self.r.iter()) {
+                            *pi = ri + beta * *pi;
                         }
                     }
                 }
@@ -324,10 +409,12 @@ impl Half<'_> {
                 for (xi, pi) in x.iter_mut().zip(p.iter()) {
                     *xi += alpha * pi;
                 }
+                let mut rr = 0.0;
                 for (ri, qi) in self.r.iter_mut().zip(self.q.iter()) {
                     *ri -= alpha * qi;
+                    rr += *ri * *ri;
                 }
-                apply_nd(self.diag, nd, self.r, self.z)
+                rr
             }
         }
     }
@@ -340,8 +427,12 @@ struct ProductView<'a> {
     nb: usize,
     /// The first block of the second half.
     half: usize,
-    values: &'a [f64],
+    /// The diagonal blocks (None: the identity, as in the scaled system).
+    values: Option<&'a [f64]>,
+    /// The couplings' pattern, and the values of their terms (the couplings' own, or the
+    /// scaled system's).
     couplings: &'a Couplings,
+    terms: &'a Terms,
     col_start: &'a [usize],
     entry_col: &'a [usize],
 }
@@ -350,10 +441,13 @@ impl ProductView<'_> {
     /// Block `j`'s diagonal block of K, in full.
     fn diagonal_block(&self, j: usize) -> Mat6 {
         let (nd, e) = (self.nd, self.col_start[j]);
+        let Some(values) = self.values else {
+            return std::array::from_fn(|i| std::array::from_fn(|k| f64::from(u8::from(i == k))));
+        };
         let mut k = [[0.0; 6]; 6];
         for q in 0..nd {
             let base = self.entry_col[e * nd + q];
-            for (a, v) in self.values[base..base + nd - q].iter().enumerate() {
+            for (a, v) in values[base..base + nd - q].iter().enumerate() {
                 k[q + a][q] = *v;
                 k[q][q + a] = *v;
             }
@@ -415,14 +509,14 @@ impl ProductView<'_> {
         let scaled = |w: &Vec6, s: f64| std::array::from_fn::<f64, ND, _>(|k| w[k] * s);
         // The terms within this half: both rows ours, both blocks in this half's x.
         let own = x[usize::from(second)];
-        for c in &cp.within[usize::from(second)] {
+        for c in &self.terms.within[usize::from(second)] {
             let [a, b] = c.blocks.map(|b| b as usize - first);
             let (da, db) = dots(c, block(own, a), block(own, b));
             add_to(y, a, scaled(&c.su, db));
             add_to(y, b, scaled(&c.v, da));
         }
         // The terms across the halves: one row ours.
-        for c in &cp.across {
+        for c in &self.terms.across {
             let [a, b] = c.blocks.map(|b| b as usize);
             let (da, db) = dots(c, self.at(x, a), self.at(x, b));
             if rows.contains(&a) {
@@ -436,7 +530,7 @@ impl ProductView<'_> {
         if second {
             for &(d, jb) in &cp.dense_across {
                 let xj: &[f64; ND] = self.at(x, jb as usize);
-                let values = cp.dense_block::<ND>(d as usize);
+                let values = self.terms.dense_block::<ND>(d as usize);
                 let mut yi = [0.0f64; ND];
                 for q in 0..ND {
                     let col: &[f64; ND] = block(values, q);
@@ -455,20 +549,25 @@ impl ProductView<'_> {
         for jb in rows.clone() {
             let xj: [f64; ND] = *self.at(x, jb);
             let mut yj = [0.0f64; ND];
-            // The diagonal block: column q's rows q.. of the block.
-            for q in 0..ND {
-                let col = &self.values[off..off + ND - q];
-                off += ND - q;
-                yj[q] += col[0] * xj[q];
-                for a in 1..ND - q {
-                    yj[q + a] += col[a] * xj[q];
-                    yj[q] += col[a] * xj[q + a];
+            match self.values {
+                // The diagonal block: column q's rows q.. of the block.
+                Some(values) => {
+                    for q in 0..ND {
+                        let col = &values[off..off + ND - q];
+                        off += ND - q;
+                        yj[q] += col[0] * xj[q];
+                        for a in 1..ND - q {
+                            yj[q + a] += col[a] * xj[q];
+                            yj[q] += col[a] * xj[q + a];
+                        }
+                    }
                 }
+                None => yj = xj,
             }
             for d in cp.dense_start[jb] as usize..cp.dense_start[jb + 1] as usize {
                 let ib = cp.dense_rows[d] as usize;
                 let xi: &[f64; ND] = self.at(x, ib);
-                let values = cp.dense_block::<ND>(d);
+                let values = self.terms.dense_block::<ND>(d);
                 if ib >= rows.end {
                     // A row of the other half: only its transpose's share is ours.
                     for q in 0..ND {
@@ -530,16 +629,12 @@ pub(crate) struct Couplings {
     sealed: bool,
     /// Per entry of the pattern: its terms, then its dense block (`u32::MAX`: none).
     count: Vec<u32>,
-    /// The rank-one terms with both blocks in the first half, both in the second; and
-    /// those with one in each.
-    within: [Vec<Coupling>; 2],
-    across: Vec<Coupling>,
+    /// The terms' values: the rank-one terms and the dense blocks' values.
+    terms: Terms,
     /// The dense blocks: per block (the earlier of the pair) the range of `dense_rows`
-    /// of its dense blocks, and each one's later block; values `nd x nd` a block, its
-    /// columns (over the earlier block's unknowns) together.
+    /// of its dense blocks, and each one's later block (their values in `terms`).
     dense_start: Vec<u32>,
     dense_rows: Vec<u32>,
-    dense_values: Vec<f64>,
     /// The dense blocks whose earlier block lies in the first half and later in the
     /// second, with their earlier blocks: the second half's rows of a product read them.
     dense_across: Vec<(u32, u32)>,
@@ -554,11 +649,11 @@ impl Couplings {
         self.sealed = false;
         self.count.clear();
         self.count.resize(entries, 0);
-        self.within.iter_mut().for_each(Vec::clear);
-        self.across.clear();
+        self.terms.within.iter_mut().for_each(Vec::clear);
+        self.terms.across.clear();
         self.dense_start.clear();
         self.dense_rows.clear();
-        self.dense_values.clear();
+        self.terms.dense_values.clear();
         self.dense_across.clear();
     }
 
@@ -581,15 +676,10 @@ impl Couplings {
     fn keep(&mut self, c: Coupling) {
         let [a, b] = c.blocks.map(|b| b >= self.half);
         match (a, b) {
-            (false, false) => self.within[0].push(c),
-            (true, true) => self.within[1].push(c),
-            _ => self.across.push(c),
+            (false, false) => self.terms.within[0].push(c),
+            (true, true) => self.terms.within[1].push(c),
+            _ => self.terms.across.push(c),
         }
-    }
-
-    /// Dense block `d`'s values.
-    fn dense_block<const ND: usize>(&self, d: usize) -> &[f64] {
-        &self.dense_values[d * ND * ND..(d + 1) * ND * ND]
     }
 
     /// Seals the terms added since the last reset (see [`Couplings`]), in the order they
@@ -621,7 +711,8 @@ impl Couplings {
             }
             self.dense_start.push(self.dense_rows.len() as u32);
         }
-        self.dense_values
+        self.terms
+            .dense_values
             .resize(self.dense_rows.len() * nd * nd, 0.0);
         let pending = std::mem::take(&mut self.pending);
         for &(e, c) in &pending {
@@ -633,7 +724,8 @@ impl Couplings {
             // Stored: rows of the later block, columns of the earlier.
             let [a, b] = c.blocks;
             let (rows, cols) = if a > b { (&c.su, &c.v) } else { (&c.v, &c.su) };
-            let values = &mut self.dense_values[d as usize * nd * nd..(d as usize + 1) * nd * nd];
+            let values =
+                &mut self.terms.dense_values[d as usize * nd * nd..(d as usize + 1) * nd * nd];
             for q in 0..nd {
                 for r in 0..nd {
                     values[q * nd + r] += rows[r] * cols[q];
@@ -642,6 +734,107 @@ impl Couplings {
         }
         self.pending = pending;
         self.pending.clear();
+    }
+}
+
+/// The values of the couplings' terms (their blocks and pattern in [`Couplings`]).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Terms {
+    /// The rank-one terms with both blocks in the first half, both in the second; and
+    /// those with one in each.
+    within: [Vec<Coupling>; 2],
+    across: Vec<Coupling>,
+    /// The dense blocks' values, `nd x nd` a block, its columns (over the earlier block's
+    /// unknowns) together.
+    dense_values: Vec<f64>,
+}
+
+impl Terms {
+    /// Dense block `d`'s values.
+    fn dense_block<const ND: usize>(&self, d: usize) -> &[f64] {
+        &self.dense_values[d * ND * ND..(d + 1) * ND * ND]
+    }
+}
+
+impl Couplings {
+    /// The terms of the scaled system L^-1 K L^-T into `out`, for the factors `l` of the
+    /// diagonal blocks (in block order): a term s u v^T between blocks a and b becomes
+    /// s (L_a^-1 u) (L_b^-1 v)^T, a dense block B of a later block i and an earlier j
+    /// becomes L_i^-1 B L_j^-T. The first half's terms and the second's are scaled at
+    /// once when `threads` is set (each term the same bits either way).
+    pub(crate) fn scale_into(&self, l: &[Packed], nd: usize, threads: bool, out: &mut Terms) {
+        match nd {
+            6 => self.scale::<6>(l, threads, out),
+            3 => self.scale::<3>(l, threads, out),
+            nd => unreachable!("blocks of {nd} unknowns"),
+        }
+    }
+
+    /// [`Couplings::scale_into`] for blocks of `ND` unknowns.
+    fn scale<const ND: usize>(&self, l: &[Packed], threads: bool, out: &mut Terms) {
+        let terms = &self.terms;
+        for h in 0..2 {
+            out.within[h].clone_from(&terms.within[h]);
+        }
+        out.across.clone_from(&terms.across);
+        out.dense_values.clone_from(&terms.dense_values);
+        let Terms {
+            within: [w0, w1],
+            across,
+            dense_values,
+        } = out;
+        let mid = across.len() / 2;
+        let (a0, a1) = across.split_at_mut(mid);
+        // The dense blocks of the first half's block columns, then the second's.
+        let nb = self.dense_start.len().saturating_sub(1);
+        let half = (self.half as usize).min(nb);
+        let cut = self.dense_start.get(half).map_or(0, |&d| d as usize);
+        let (v0, v1) = dense_values.split_at_mut(cut * ND * ND);
+        let rank_one = |terms: &mut [Coupling]| {
+            for c in terms {
+                let [a, b] = c.blocks.map(|b| b as usize);
+                lower_solve::<ND>(&l[a], block_mut::<ND>(&mut c.su, 0));
+                lower_solve::<ND>(&l[b], block_mut::<ND>(&mut c.v, 0));
+            }
+        };
+        let dense = |values: &mut [f64], columns: std::ops::Range<usize>| {
+            let first = self
+                .dense_start
+                .get(columns.start)
+                .map_or(0, |&d| d as usize);
+            for jb in columns {
+                for d in self.dense_start[jb] as usize..self.dense_start[jb + 1] as usize {
+                    let ib = self.dense_rows[d] as usize;
+                    let at = (d - first) * ND * ND;
+                    let values = &mut values[at..at + ND * ND];
+                    // Its columns (over block j's unknowns) by L_i^-1, then its rows by
+                    // L_j^-1.
+                    for q in 0..ND {
+                        lower_solve::<ND>(&l[ib], block_mut::<ND>(values, q));
+                    }
+                    for r in 0..ND {
+                        let mut row: [f64; ND] = std::array::from_fn(|q| values[q * ND + r]);
+                        lower_solve::<ND>(&l[jb], &mut row);
+                        for (q, v) in row.into_iter().enumerate() {
+                            values[q * ND + r] = v;
+                        }
+                    }
+                }
+            }
+        };
+        both(
+            threads,
+            || {
+                rank_one(w1);
+                rank_one(a1);
+                dense(v1, half..nb);
+            },
+            || {
+                rank_one(w0);
+                rank_one(a0);
+                dense(v0, 0..half);
+            },
+        );
     }
 }
 
@@ -659,9 +852,9 @@ fn block<const ND: usize>(v: &[f64], b: usize) -> &[f64; ND] {
         .expect("a block of ND values")
 }
 
-/// A symmetric 6 x 6 block by its lower triangle, row by row: entry (i, k), k <= i, at
-/// i (i + 1) / 2 + k, so that the leading 3 x 3 part comes first. 21 values instead of
-/// 36: the preconditioner and the bound are read at every iteration, from memory.
+/// A symmetric 6 x 6 block, or a lower triangular one, by its lower triangle, row by
+/// row: entry (i, k), k <= i, at i (i + 1) / 2 + k, so that the leading 3 x 3 part comes
+/// first. 21 values instead of 36 (the diagonal blocks' factors, the bound's inverses).
 pub(crate) type Packed = [f64; 21];
 
 /// Where entry (i, k) of a symmetric block lies in its [`Packed`] form.
@@ -696,30 +889,84 @@ fn inverse_of(a: &Mat6, nd: usize) -> Packed {
     out
 }
 
-/// z = A_b r_b block by block, for symmetric blocks `a` of `ND` unknowns; returns r . z.
-fn apply_blocks<const ND: usize>(a: &[Packed], r: &[f64], z: &mut [f64]) -> f64 {
-    let mut sum = 0.0;
-    for ((m, rb), zb) in a.iter().zip(r.chunks_exact(ND)).zip(z.chunks_exact_mut(ND)) {
-        let rb: &[f64; ND] = rb.try_into().expect("a block");
-        for i in 0..ND {
-            let mut acc = 0.0;
-            for k in 0..ND {
-                acc += m[packed(i, k)] * rb[k];
-            }
-            zb[i] = acc;
-            sum += acc * rb[i];
+/// The Cholesky factor L (lower, packed: entry (i, k), k <= i, where [`packed`] puts
+/// it) of the leading `nd` x `nd` part of symmetric `a`; None if it is not numerically
+/// positive definite.
+fn cholesky(a: &Mat6, nd: usize) -> Option<Packed> {
+    let l = chol(a, nd)?;
+    let mut out = [0.0; 21];
+    for i in 0..nd {
+        for k in 0..=i {
+            out[packed(i, k)] = l[i][k];
         }
+    }
+    Some(out)
+}
+
+/// x <- L^-1 x for a packed lower factor.
+fn lower_solve<const ND: usize>(l: &Packed, x: &mut [f64; ND]) {
+    for i in 0..ND {
+        let mut s = x[i];
+        for k in 0..i {
+            s -= l[packed(i, k)] * x[k];
+        }
+        x[i] = s / l[packed(i, i)];
+    }
+}
+
+/// x <- L^-T x for a packed lower factor.
+fn upper_solve<const ND: usize>(l: &Packed, x: &mut [f64; ND]) {
+    for i in (0..ND).rev() {
+        let mut s = x[i];
+        for k in i + 1..ND {
+            s -= l[packed(k, i)] * x[k];
+        }
+        x[i] = s / l[packed(i, i)];
+    }
+}
+
+/// x <- L^T x for a packed lower factor (row i reads x's entries from i on, not yet
+/// overwritten).
+fn upper_mul<const ND: usize>(l: &Packed, x: &mut [f64; ND]) {
+    for i in 0..ND {
+        let mut s = 0.0;
+        for k in i..ND {
+            s += l[packed(k, i)] * x[k];
+        }
+        x[i] = s;
+    }
+}
+
+/// x <- L x for a packed lower factor (row i reads x's entries up to i, not yet
+/// overwritten).
+fn lower_mul<const ND: usize>(l: &Packed, x: &mut [f64; ND]) {
+    for i in (0..ND).rev() {
+        let mut s = 0.0;
+        for k in 0..=i {
+            s += l[packed(i, k)] * x[k];
+        }
+        x[i] = s;
+    }
+}
+
+/// t^T M t for a packed symmetric M.
+fn quadratic<const ND: usize>(m: &Packed, t: &[f64; ND]) -> f64 {
+    let mut sum = 0.0;
+    for i in 0..ND {
+        let mut acc = 0.0;
+        for k in 0..ND {
+            acc += m[packed(i, k)] * t[k];
+        }
+        sum += acc * t[i];
     }
     sum
 }
 
-/// [`apply_blocks`] for blocks of `nd` unknowns.
-fn apply_nd(a: &[Packed], nd: usize, r: &[f64], z: &mut [f64]) -> f64 {
-    match nd {
-        6 => apply_blocks::<6>(a, r, z),
-        3 => apply_blocks::<3>(a, r, z),
-        nd => unreachable!("blocks of {nd} unknowns"),
-    }
+/// Block `b` of `ND` values of `v`, to write.
+fn block_mut<const ND: usize>(v: &mut [f64], b: usize) -> &mut [f64; ND] {
+    (&mut v[b * ND..(b + 1) * ND])
+        .try_into()
+        .expect("a block of ND values")
 }
 
 /// The Cholesky factor (lower, in place of a full matrix) of the leading `nd` x `nd` part
@@ -922,69 +1169,85 @@ mod tests {
         }
     }
 
-    /// A product with K equals the dense matrix's, whatever the couplings' form: pairs of
-    /// blocks with one to four terms (kept rank-one below nd / 2 terms, summed into a
-    /// dense block from there), pairs within either half of the blocks and across them,
-    /// and terms added after the seal; the same bits on one thread and two. Fails when a
-    /// dense block's orientation, a half's share of a term across the halves, or the
-    /// count that decides the form is wrong.
+    /// Ten blocks of `nd` unknowns coupled in pairs with one to four terms each (kept
+    /// rank-one below nd / 2 terms, summed into a dense block from there), within either
+    /// half of the blocks and across them, sealed, then two terms more; with the dense
+    /// matrix of the same terms.
+    fn coupled(nd: usize) -> (BlockSystem, Vec<Vec<f64>>) {
+        let nb = 10;
+        let pairs: Vec<(u32, u32)> = vec![
+            (0, 1),
+            (0, 7),
+            (1, 2),
+            (2, 6),
+            (3, 4),
+            (4, 9),
+            (5, 6),
+            (6, 8),
+            (7, 8),
+        ];
+        let (mut sys, mut dense) = empty(nb, nd, &pairs);
+        let mut rnd = rng(5);
+        let mut term = |sys: &mut BlockSystem, dense: &mut Vec<Vec<f64>>, i: u32, j: u32| {
+            let u: Vec6 = std::array::from_fn(|k| if k < nd { rnd() } else { 0.0 });
+            let v: Vec6 = std::array::from_fn(|k| if k < nd { rnd() } else { 0.0 });
+            let s = 1.0 + rnd();
+            sys.add_outer(sys.entry(i, j).unwrap(), i, j, s, &u, &v);
+            let (i, j) = (i as usize, j as usize);
+            for a in 0..nd {
+                for c in 0..nd {
+                    dense[i * nd + a][j * nd + c] += s * u[a] * v[c];
+                    dense[j * nd + c][i * nd + a] += s * u[a] * v[c];
+                }
+            }
+        };
+        for i in 0..nb as u32 {
+            let k: Mat6 = std::array::from_fn(|a| {
+                // Diagonally dominant, and another for each block.
+                let i = f64::from(i);
+                std::array::from_fn(|c| {
+                    if a == c {
+                        5.0 + a as f64 + 0.5 * i
+                    } else {
+                        0.1 * (a + c) as f64 + 0.01 * i
+                    }
+                })
+            });
+            sys.add_diagonal(i, &k);
+            for a in 0..nd {
+                for c in 0..nd {
+                    dense[i as usize * nd + a][i as usize * nd + c] += k[a][c];
+                }
+            }
+        }
+        // Pair k gets k % 4 + 1 terms, in either order of its blocks.
+        for (k, &(i, j)) in pairs.iter().enumerate() {
+            for t in 0..=k % 4 {
+                let (a, b) = if t % 2 == 0 { (i, j) } else { (j, i) };
+                term(&mut sys, &mut dense, a, b);
+            }
+        }
+        sys.seal();
+        let dense_pairs = sys.couplings.dense_rows.len();
+        let expect = (0..pairs.len())
+            .filter(|k| k % 4 + 1 >= nd.div_ceil(2))
+            .count();
+        assert_eq!(dense_pairs, expect, "nd {nd}: dense blocks");
+        term(&mut sys, &mut dense, 7, 0);
+        term(&mut sys, &mut dense, 4, 9);
+        (sys, dense)
+    }
+
+    /// A product with K equals the dense matrix's, whatever the couplings' form (see
+    /// [`coupled`]); the same bits on one thread and two. Fails when a dense block's
+    /// orientation, a half's share of a term across the halves, or the count that decides
+    /// the form is wrong.
     #[test]
     fn a_product_with_the_couplings_is_the_dense_matrix_s() {
         for nd in [3usize, 6] {
-            let nb = 10;
-            let pairs: Vec<(u32, u32)> = vec![
-                (0, 1),
-                (0, 7),
-                (1, 2),
-                (2, 6),
-                (3, 4),
-                (4, 9),
-                (5, 6),
-                (6, 8),
-                (7, 8),
-            ];
-            let (mut sys, mut dense) = empty(nb, nd, &pairs);
-            let n = nb * nd;
-            let mut rnd = rng(5);
-            let mut term = |sys: &mut BlockSystem, dense: &mut Vec<Vec<f64>>, i: u32, j: u32| {
-                let u: Vec6 = std::array::from_fn(|k| if k < nd { rnd() } else { 0.0 });
-                let v: Vec6 = std::array::from_fn(|k| if k < nd { rnd() } else { 0.0 });
-                let s = 1.0 + rnd();
-                sys.add_outer(sys.entry(i, j).unwrap(), i, j, s, &u, &v);
-                let (i, j) = (i as usize, j as usize);
-                for a in 0..nd {
-                    for c in 0..nd {
-                        dense[i * nd + a][j * nd + c] += s * u[a] * v[c];
-                        dense[j * nd + c][i * nd + a] += s * u[a] * v[c];
-                    }
-                }
-            };
-            for i in 0..nb as u32 {
-                let k: Mat6 = std::array::from_fn(|a| {
-                    std::array::from_fn(|c| if a == c { 5.0 } else { 0.1 })
-                });
-                sys.add_diagonal(i, &k);
-                for a in 0..nd {
-                    for c in 0..nd {
-                        dense[i as usize * nd + a][i as usize * nd + c] += k[a][c];
-                    }
-                }
-            }
-            // Pair k gets k % 4 + 1 terms, in either order of its blocks.
-            for (k, &(i, j)) in pairs.iter().enumerate() {
-                for t in 0..=k % 4 {
-                    let (a, b) = if t % 2 == 0 { (i, j) } else { (j, i) };
-                    term(&mut sys, &mut dense, a, b);
-                }
-            }
-            sys.seal();
-            let dense_pairs = sys.couplings.dense_rows.len();
-            let expect = (0..pairs.len())
-                .filter(|k| k % 4 + 1 >= nd.div_ceil(2))
-                .count();
-            assert_eq!(dense_pairs, expect, "nd {nd}: dense blocks");
-            term(&mut sys, &mut dense, 7, 0);
-            term(&mut sys, &mut dense, 4, 9);
+            let (mut sys, dense) = coupled(nd);
+            let n = sys.nb * nd;
+            let mut rnd = rng(9);
             let x: Vec<f64> = (0..n).map(|_| rnd()).collect();
             let mut y1 = vec![0.0; n];
             sys.threads = false;
@@ -1007,6 +1270,82 @@ mod tests {
             }
             let want: f64 = (0..n).map(|r| x[r] * y1[r]).sum();
             assert!((xy1 - want).abs() <= 1e-12 * (1.0 + want.abs()));
+        }
+    }
+
+    /// The scaled system's product, the identity on the diagonal and the scaled terms off
+    /// it, is L^-1 K L^-T x with L the blocks' factors, here computed densely: K's
+    /// product with L^-T x, then L^-1 of it. The same bits scaled on one thread and two.
+    /// Fails when a rank-one term's or a dense block's scaling takes the wrong factor or
+    /// side.
+    #[test]
+    fn the_scaled_system_s_product_is_k_between_the_inverse_factors() {
+        for nd in [3usize, 6] {
+            let (sys, dense) = coupled(nd);
+            let (nb, n) = (sys.nb, sys.nb * nd);
+            let view = sys.product_view();
+            let factors: Vec<Packed> = (0..nb)
+                .map(|j| cholesky(&view.diagonal_block(j), nd).unwrap())
+                .collect();
+            let scale = |threads: bool| {
+                let mut terms = Terms::default();
+                sys.couplings.scale_into(&factors, nd, threads, &mut terms);
+                terms
+            };
+            let (one, two) = (scale(false), in_pool_of_two(|| scale(true)));
+            let scaled = ProductView {
+                values: None,
+                terms: &one,
+                ..sys.product_view()
+            };
+            let mut rnd = rng(3);
+            let x: Vec<f64> = (0..n).map(|_| rnd()).collect();
+            let mut y = vec![0.0; n];
+            let split = scaled.half * nd;
+            let halves = x.split_at(split);
+            let (y0, y1) = y.split_at_mut(split);
+            scaled.product(0, [halves.0, halves.1], y0);
+            scaled.product(1, [halves.0, halves.1], y1);
+            // Densely: w = L^-T x, v = K w, want = L^-1 v (block by block, the pattern's
+            // order being the blocks' own here).
+            let per_block = |v: &[f64], f: &dyn Fn(&Packed, &mut [f64; 6])| -> Vec<f64> {
+                let mut out = Vec::with_capacity(n);
+                for (b, l) in factors.iter().enumerate() {
+                    let mut t = [0.0; 6];
+                    t[..nd].copy_from_slice(&v[b * nd..(b + 1) * nd]);
+                    f(l, &mut t);
+                    out.extend_from_slice(&t[..nd]);
+                }
+                out
+            };
+            let w = per_block(&x, &|l, t| match nd {
+                6 => upper_solve::<6>(l, t),
+                _ => upper_solve::<3>(l, block_mut::<3>(t, 0)),
+            });
+            let v: Vec<f64> = (0..n)
+                .map(|r| (0..n).map(|c| dense[r][c] * w[c]).sum())
+                .collect();
+            let want = per_block(&v, &|l, t| match nd {
+                6 => lower_solve::<6>(l, t),
+                _ => lower_solve::<3>(l, block_mut::<3>(t, 0)),
+            });
+            let scale_of = want.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for r in 0..n {
+                assert!(
+                    (y[r] - want[r]).abs() <= 1e-12 * scale_of,
+                    "nd {nd}, row {r}: {} against {}",
+                    y[r],
+                    want[r]
+                );
+            }
+            let bits = |t: &Terms| {
+                let mut all: Vec<u64> = t.dense_values.iter().map(|v| v.to_bits()).collect();
+                for c in t.within.iter().flatten().chain(&t.across) {
+                    all.extend(c.su.iter().chain(&c.v).map(|v| v.to_bits()));
+                }
+                all
+            };
+            assert_eq!(bits(&one), bits(&two), "nd {nd}: threads");
         }
     }
 

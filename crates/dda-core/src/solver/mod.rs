@@ -175,16 +175,18 @@ pub struct BlockSystem {
     pub threads: bool,
     /// The iterative solve's start, then its solution (block order of the pattern).
     pub(super) x: Vec<f64>,
-    /// The iterative solve's inverses of the diagonal blocks (its preconditioner) and of
-    /// the inertia terms (its bound), and its work vectors.
-    pub(super) diag_inverse: Vec<iterative::Packed>,
+    /// The iterative solve's factors of the diagonal blocks (the scaling of its system)
+    /// and inverses of the blocks' own terms (its bound), and its work vectors.
+    pub(super) factors: Vec<iterative::Packed>,
     pub(super) metric: Vec<iterative::Packed>,
     pub(super) work: Vec<f64>,
     /// The iterative layout's couplings between blocks (`iterative::Couplings`): the
     /// off-diagonal terms, kept as rank-one terms or dense blocks, pair by pair.
     pub(super) couplings: iterative::Couplings,
+    /// The couplings' terms in the scaled system the iterative solve iterates on.
+    pub(super) scaled: iterative::Terms,
     /// Per block (in the pattern's order): whether its diagonal block changed since the
-    /// iterative solve last inverted it (cleared and refilled, or a term added).
+    /// iterative solve last factorised it (cleared and refilled, or a term added).
     pub(super) stale: Vec<bool>,
 }
 
@@ -236,10 +238,11 @@ impl Default for BlockSystem {
             has_pattern: false,
             threads: false,
             x: Vec::new(),
-            diag_inverse: Vec::new(),
+            factors: Vec::new(),
             metric: Vec::new(),
             work: Vec::new(),
             couplings: iterative::Couplings::default(),
+            scaled: iterative::Terms::default(),
             stale: Vec::new(),
         }
     }

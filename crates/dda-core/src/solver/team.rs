@@ -1,7 +1,7 @@
 //! Two halves of the blocks worked at once through a whole iterative solve.
 //!
 //! A conjugate-gradient iteration makes three passes over the blocks (the product with
-//! K, the descent with the preconditioner, the turn of the direction), each split into
+//! the scaled K, the descent, the turn of the direction), each split into
 //! the two halves of the blocks and followed by a sum over both. Handed to the thread
 //! pool pass by pass (`rayon::join`), the second half often waited for a worker that
 //! had gone to sleep between passes: on the 10,131-block column two threads took a CG
@@ -22,18 +22,21 @@ use std::time::{Duration, Instant};
 /// One pass over a half of the blocks (see `solver::iterative`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) enum Phase {
-    /// The inverses of the diagonal blocks that changed: the preconditioner.
-    Invert,
-    /// r = F - K x and z = D^-1 r; the sum is r . z.
+    /// The scaled system's right-hand side L^-1 F and start L^T x (D = L L^T the
+    /// diagonal blocks).
+    Scale,
+    /// r = L^-1 F - (L^-1 K L^-T) x, the scaled system's residual; the sum is r . r.
     Residual,
-    /// w = I^-1 r; the sum is r . w, the bound's B.
+    /// The bound's B = (L r)^T K_o^-1 (L r), the sum.
     Bound,
-    /// p = z (a restart, `None`) or p = z + beta p.
+    /// p = r (a restart, `None`) or p = r + beta p.
     Turn(Option<f64>),
-    /// q = K p; the sum is p . q.
+    /// q = (L^-1 K L^-T) p; the sum is p . q.
     Product,
-    /// x += alpha p, r -= alpha q, z = D^-1 r; the sum is r . z.
+    /// x += alpha p, r -= alpha q; the sum is r . r.
     Descend(f64),
+    /// The solution x = L^-T x of the scaled system's.
+    Unscale,
 }
 
 /// The second half's work: whichever thread claims a phase runs it.
@@ -109,6 +112,20 @@ pub(super) fn with_team<R>(
         let _close = Flag(&link.closed, Some(helper.thread().clone()));
         body(&mut Team::Pair(&link, &second))
     })
+}
+
+/// Runs `second` and `first`: `second` on a thread of its own when `threads` is set and
+/// the thread pool has two threads or more, else one after the other on this thread.
+pub(super) fn both(threads: bool, second: impl FnOnce() + Send, first: impl FnOnce()) {
+    if !(threads && pool_threads() >= 2) {
+        first();
+        second();
+        return;
+    }
+    std::thread::scope(|s| {
+        s.spawn(second);
+        first();
+    });
 }
 
 /// Threads of the pool the solve runs in.
