@@ -284,7 +284,8 @@ pub(crate) fn deep_covers(
 /// entrance block's face that attains d_RE2 at the trial positions (block i moved by
 /// `trial[i]`). Where the face closed in a deep pair no longer attains it in the trial,
 /// the contact moves to the attaining face (the first by key; with its trial r in
-/// [0, 1]) with the same state, and the OCI goes on. Returns how many pairs moved.
+/// [0, 1]) with the same state, and the OCI goes on. Returns how many pairs moved, and
+/// appends the contacts they moved to to `activated`.
 ///
 /// Our choice, completing the deep rule: the spring measures the overlap, p d^2 / 2, only
 /// if it sits on the face that is deepest where the step ends. Left on the face deepest at
@@ -296,6 +297,7 @@ pub(crate) fn follow_deepest(
     shapes: &[BlockShape],
     trial: &[Motion],
     set: &mut ContactSet,
+    activated: &mut Vec<u32>,
 ) -> usize {
     let mut moved = 0;
     for pk in 0..set.pairs.len() {
@@ -354,6 +356,7 @@ pub(crate) fn follow_deepest(
         for c in contacts.iter_mut().filter(|c| held(c)) {
             c.active = false;
         }
+        activated.push((pc.start as usize + new) as u32);
         let r = measure(&contacts[new]).0.r;
         let c = &mut contacts[new];
         c.active = true;

@@ -365,6 +365,8 @@ pub fn track(
 #[derive(Clone, Debug, Default)]
 pub struct TrackList {
     entries: Vec<Tracked>,
+    /// The candidates the last [`TrackList::track`] made active, in the order it did.
+    activated: Vec<u32>,
 }
 
 /// One entry of a [`TrackList`].
@@ -422,14 +424,16 @@ impl TrackList {
     }
 
     /// Open-close iteration update of activity for the set the list was built from (see
-    /// [`track`]). Returns how many candidates became active.
+    /// [`track`]). Returns how many candidates became active (listed by
+    /// [`TrackList::activated`]).
     pub fn track(
-        &self,
+        &mut self,
         detector: &dyn ContactDetector,
         shapes: &[BlockShape],
         trial: &[Motion],
         set: &mut ContactSet,
     ) -> usize {
+        self.activated.clear();
         if !detector.tracks_trajectories() {
             return 0;
         }
@@ -450,16 +454,23 @@ impl TrackList {
             let trial_m = VertexEdge::new(a1, b0, b1);
             if detector.activates(VertexEdge { d_n: c.d_n, r: c.r }, trial_m) {
                 // Lock where the trajectory crossed the edge's line (0 <= t <= 1).
-                let t = c.d_n / (c.d_n - trial_m.d_n);
+                let at = c.d_n / (c.d_n - trial_m.d_n);
                 c.active = true;
                 c.state = crate::contact::ContactState::Locked;
-                c.locked_r = (c.r + t * (trial_m.r - c.r)).clamp(0.0, 1.0);
+                c.locked_r = (c.r + at * (trial_m.r - c.r)).clamp(0.0, 1.0);
+                self.activated.push(t.contact);
                 changed += 1;
             }
         }
         if detector.keeps_closed_contacts() {
-            changed += crate::cover::follow_deepest(shapes, trial, set);
+            changed += crate::cover::follow_deepest(shapes, trial, set, &mut self.activated);
         }
         changed
+    }
+
+    /// The candidates the last [`TrackList::track`] made active (a spring moved to the
+    /// deepest face included), each once, in the order it did.
+    pub fn activated(&self) -> &[u32] {
+        &self.activated
     }
 }

@@ -233,7 +233,8 @@ proptest! {
 
     /// Over two open-close iterations with random block motions (the second after the
     /// first one's activations), tracking through the list made at step start activates
-    /// exactly what a scan of every candidate does, with the same locked points.
+    /// exactly what a scan of every candidate does, with the same locked points, and
+    /// lists the candidates it made active.
     #[test]
     fn track_list_is_a_scan_of_every_candidate(seed in any::<u64>()) {
         let shapes = jointed_column();
@@ -263,9 +264,17 @@ proptest! {
                     Motion::new(s.centroid, &d)
                 })
                 .collect();
+            let before: Vec<bool> = set.contacts.iter().map(|c| c.active).collect();
             let n = list.track(&CoverDetector, &shapes, &trial, &mut set);
             prop_assert_eq!(n, track_by_scan(&CoverDetector, &shapes, &trial, &mut by_scan));
             prop_assert_eq!(&set, &by_scan);
+            // The list names every candidate made active, and only those.
+            let made: Vec<u32> = (0..set.contacts.len() as u32)
+                .filter(|&k| set.contacts[k as usize].active && !before[k as usize])
+                .collect();
+            let mut listed = list.activated().to_vec();
+            listed.sort_unstable();
+            prop_assert_eq!(listed, made);
             activated += n;
         }
         prop_assert!(activated > 0, "no candidate was activated: the test tests nothing");

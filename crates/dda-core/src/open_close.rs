@@ -459,7 +459,8 @@ impl Simulation {
     /// other closed contact of such a joint slides already: the step-start normalisation
     /// and `update_states` see to it).
     pub(crate) fn set_up_new_active(&mut self) {
-        for k in 0..self.state.contacts.contacts.len() {
+        for &k in self.scratch.track_list.activated() {
+            let k = k as usize;
             let c = self.state.contacts.contacts[k];
             if !(c.active && self.scratch.rows[k].g0.is_nan()) {
                 continue;
