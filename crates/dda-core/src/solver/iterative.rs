@@ -620,7 +620,7 @@ impl ProductView<'_> {
 /// One term s u v^T of the couplings between two blocks (and its transpose): `s u`
 /// over the unknowns of the first block, `v` over those of the second (positions in the
 /// pattern's order).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Coupling {
     blocks: [u32; 2],
     su: Vec6,
@@ -790,10 +790,12 @@ impl Couplings {
     /// [`Couplings::scale_into`] for blocks of `ND` unknowns.
     fn scale<const ND: usize>(&self, l: &[Packed], threads: bool, out: &mut Terms) {
         let terms = &self.terms;
+        // The rank-one terms are written scaled from the couplings' own (the lists only
+        // fitted to their lengths here); the dense blocks are copied, then scaled.
         for h in 0..2 {
-            out.within[h].clone_from(&terms.within[h]);
+            out.within[h].resize(terms.within[h].len(), Coupling::default());
         }
-        out.across.clone_from(&terms.across);
+        out.across.resize(terms.across.len(), Coupling::default());
         out.dense_values.clone_from(&terms.dense_values);
         let Terms {
             within: [w0, w1],
@@ -802,16 +804,18 @@ impl Couplings {
         } = out;
         let mid = across.len() / 2;
         let (a0, a1) = across.split_at_mut(mid);
+        let (s0, s1) = terms.across.split_at(mid);
         // The dense blocks of the first half's block columns, then the second's.
         let nb = self.dense_start.len().saturating_sub(1);
         let half = (self.half as usize).min(nb);
         let cut = self.dense_start.get(half).map_or(0, |&d| d as usize);
         let (v0, v1) = dense_values.split_at_mut(cut * ND * ND);
-        let rank_one = |terms: &mut [Coupling]| {
-            for c in terms {
+        let rank_one = |own: &[Coupling], scaled: &mut [Coupling]| {
+            for (c, t) in own.iter().zip(scaled) {
+                *t = *c;
                 let [a, b] = c.blocks.map(|b| b as usize);
-                lower_solve::<ND>(&l[a], block_mut::<ND>(&mut c.su, 0));
-                lower_solve::<ND>(&l[b], block_mut::<ND>(&mut c.v, 0));
+                lower_solve::<ND>(&l[a], block_mut::<ND>(&mut t.su, 0));
+                lower_solve::<ND>(&l[b], block_mut::<ND>(&mut t.v, 0));
             }
         };
         let dense = |values: &mut [f64], columns: std::ops::Range<usize>| {
@@ -842,13 +846,13 @@ impl Couplings {
         both(
             threads,
             || {
-                rank_one(w1);
-                rank_one(a1);
+                rank_one(&terms.within[1], w1);
+                rank_one(s1, a1);
                 dense(v1, half..nb);
             },
             || {
-                rank_one(w0);
-                rank_one(a0);
+                rank_one(&terms.within[0], w0);
+                rank_one(s0, a0);
                 dense(v0, 0..half);
             },
         );
