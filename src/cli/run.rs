@@ -19,7 +19,7 @@ use super::signals::{self, Signals};
 use super::{Failure, Resolved, bad, build_scene, default_out, resolve_scene, validate};
 use clap::Args;
 use dda::report::{
-    BOLTS_HEADER, Frame, HISTORY_HEADER, MEASUREMENTS_HEADER, bolt_rows, frame_resolution,
+    BOLTS_HEADER, Frame, HISTORY_HEADER, MEASUREMENTS_HEADER, bolt_rows, counted, frame_resolution,
     frame_view, history_row, measurement_rows,
 };
 use dda_core::{Checkpoint, RunOptions, Scene, SettlingSummary, Simulation, Summary};
@@ -697,8 +697,8 @@ impl Job {
                     });
                     if !self.quiet {
                         let line = format!(
-                            "settled in {} static steps{}, solved {} ({seconds:.3} s)",
-                            done.steps,
+                            "settled in {}{}, solved {} ({seconds:.3} s)",
+                            counted(done.steps as u64, "static step"),
                             if done.converged {
                                 ""
                             } else {
@@ -860,13 +860,13 @@ impl Job {
         if !self.quiet {
             let s = &summary;
             eprintln!(
-                "{} s simulated in {} steps ({} OCI iterations, {} dt cuts); \
+                "{} s simulated in {} ({}, {}); \
                  {:.3} s wall: detection {:.3} s, assembly {:.3} s, solve {:.3} s; \
                  max penetration {:.3e} m",
                 s.time_simulated,
-                s.steps,
-                s.oci_iterations,
-                s.time_step_cuts,
+                counted(s.steps, "step"),
+                counted(s.oci_iterations, "OCI iteration"),
+                counted(s.time_step_cuts, "dt cut"),
                 s.seconds.total,
                 s.seconds.contact_detection,
                 s.seconds.assembly,

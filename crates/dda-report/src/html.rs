@@ -3,7 +3,7 @@
 //! contacts marked), time histories, the summary with any failure diagnosis, and the
 //! effects and parameters used.
 
-use super::{Frame, escape, plot};
+use super::{Frame, counted, escape, plot};
 use dda_core::{Model, Scene, Summary};
 use dda_geom::Aabb;
 use std::fmt::Write as _;
@@ -206,11 +206,11 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
     };
     let _ = writeln!(
         page,
-        r#"<p class="{status_class}" id="status">{}: {} s simulated in {} steps ({} OCI iterations), detector {}, {:.3} s wall.</p>"#,
+        r#"<p class="{status_class}" id="status">{}: {} s simulated in {} ({}), detector {}, {:.3} s wall.</p>"#,
         escape(&s.status),
         s.time_simulated,
-        s.steps,
-        s.oci_iterations,
+        counted(s.steps, "step"),
+        counted(s.oci_iterations, "OCI iteration"),
         escape(&s.detector),
         s.seconds.total
     );

@@ -496,6 +496,16 @@ pub fn outcome_svg(
     s
 }
 
+/// `n` and `noun`, the noun in the plural unless `n` is 1 ("1 step", "8 OCI
+/// iterations"); for the nouns of a run's counts, whose plurals add an "s".
+pub fn counted(n: u64, noun: &str) -> String {
+    if n == 1 {
+        format!("1 {noun}")
+    } else {
+        format!("{n} {noun}s")
+    }
+}
+
 /// `s` with the characters HTML and SVG treat specially escaped.
 pub fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
@@ -506,6 +516,15 @@ pub fn escape(s: &str) -> String {
 
 #[cfg(test)]
 mod tests {
+
+    /// Counts read as English: the noun singular for one, plural otherwise (zero
+    /// included).
+    #[test]
+    fn counts_take_the_noun_s_number() {
+        assert_eq!(counted(1, "step"), "1 step");
+        assert_eq!(counted(0, "dt cut"), "0 dt cuts");
+        assert_eq!(counted(8, "OCI iteration"), "8 OCI iterations");
+    }
     use super::*;
 
     /// Four significant digits of every finite number are finite, the normal ones within

@@ -4,7 +4,7 @@ use super::escape;
 use std::fmt::Write as _;
 
 /// An SVG plot of named series of (x, y) points on linear axes: joined by lines if
-/// `lines`, with a dot at each point if `dots`. The axes span "nice" ranges (the data's,
+/// `lines`, with a dot at each point if `dots` (and at a series' only point). The axes span "nice" ranges (the data's,
 /// the y axis from 0 or below, widened to whole steps of 1, 2 or 5 times a power of ten)
 /// with a labelled tick and a grid line at every step; labels keep inside the picture.
 pub fn plot(
@@ -100,7 +100,8 @@ pub fn plot(
                 line.join(" ")
             );
         }
-        for &(x, y) in p.iter().filter(|_| dots) {
+        // A series of one point has no line to draw: its dot stands for it.
+        for &(x, y) in p.iter().filter(|_| dots || p.len() == 1) {
             let _ = writeln!(
                 s,
                 r#"<circle cx="{:.1}" cy="{:.1}" r="3" fill="{c}"/>"#,
@@ -134,11 +135,15 @@ pub struct Ticks {
 }
 
 impl Ticks {
-    /// The ticks of a range from `lo` to `hi` (a flat or empty range gets a unit span, and
-    /// so does one narrower than 1e-300, whose steps would be subnormal numbers or zero).
+    /// The ticks of a range from `lo` to `hi`. A flat range at v spans 0 to 2 v, with v
+    /// in its middle (a run of one step: its one time, 1 ms, on an axis from 0 to 2 ms);
+    /// a flat range at 0, an empty one, and one narrower than 1e-300, whose steps would
+    /// be subnormal numbers or zero, get a unit span.
     pub fn new(lo: f64, hi: f64) -> Self {
         let (lo, hi) = if hi > lo && (hi - lo).is_finite() && hi - lo >= 1e-300 {
             (lo, hi)
+        } else if hi == lo && lo.is_finite() && 2.0 * lo.abs() >= 1e-300 {
+            (lo - lo.abs(), lo + lo.abs())
         } else if lo.is_finite() {
             (lo, lo + 1.0)
         } else {
@@ -219,6 +224,39 @@ mod tests {
         assert_eq!(t.label(0.6000000000000001), "0.6");
         let big = Ticks::new(0.0, 15930492.342);
         assert_eq!(big.label(4e6), "4.0e6");
+    }
+
+    /// A run of one step has one point a history: the plot shows it as a dot, on a time
+    /// axis from 0 to twice its time (not a line of one point, which draws nothing, on
+    /// an axis from its time to a second later).
+    #[test]
+    fn a_series_of_one_point_is_a_dot_in_the_middle_of_its_axis() {
+        let svg = plot(
+            "t",
+            "x",
+            "y",
+            &[("".into(), vec![(1e-3, 5.0)])],
+            true,
+            false,
+        );
+        let dots: Vec<&str> = svg.lines().filter(|l| l.starts_with("<circle")).collect();
+        assert_eq!(dots.len(), 1, "{svg}");
+        // The plot area spans x = 78 to 620 px: its middle is 349.
+        assert!(dots[0].contains(r#"cx="349.0""#), "{}", dots[0]);
+        let t = Ticks::new(1e-3, 1e-3);
+        assert_eq!((t.lo, t.hi), (0.0, 2e-3));
+        let t = Ticks::new(-4.0, -4.0);
+        assert_eq!((t.lo, t.hi), (-8.0, 0.0));
+        // Two points make a line without dots.
+        let two = plot(
+            "t",
+            "x",
+            "y",
+            &[("".into(), vec![(0.0, 1.0), (1.0, 2.0)])],
+            true,
+            false,
+        );
+        assert!(!two.contains("<circle"));
     }
 
     /// Every tick label of a plot is a whole number of the picture's text and lies within
