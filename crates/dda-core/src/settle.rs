@@ -39,7 +39,8 @@
 //! that does not converge within the steps the rounds before it took is undone, and so
 //! is a last way back that the check step does not confirm; blocks whose slide is not
 //! their steady motion (they came to rest after loading their contacts) are not taken
-//! back at all.
+//! back at all, and nothing is after a round whose last step turned a moving block (a
+//! mechanism, [`Simulation::was_a_slide`]).
 //!
 //! The run then starts from the settled places, stresses and contacts (their springs
 //! loaded, shear springs anchored where they were, glued seams bonded) with the blocks'
