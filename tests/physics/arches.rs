@@ -8,13 +8,12 @@
 use dda::core::{Format, RunOptions, Scene, Simulation};
 use std::fmt::Write;
 
-/// A semicircular arch of `n` voussoirs, centre-line radius 1 m, thickness `t`, on a
-/// fixed base, joints at 40 degrees of friction, deformable stone (E = 20 GPa), for
-/// `duration` s.
-fn arch(n: usize, t: f64, duration: f64) -> String {
-    let (ri, ro) = (1.0 - t / 2.0, 1.0 + t / 2.0);
-    let mut s = format!(
-        r#"name = "arch"
+/// The start of a scene of stone blocks (E = 20 GPa) under gravity, joints at `friction`
+/// degrees, for `duration` s: a fixed ground 1 m deep from x = -`half_width` to
+/// `half_width`, its top at y = 0.
+fn stone_scene(name: &str, duration: f64, friction: f64, half_width: f64) -> String {
+    format!(
+        r#"name = "{name}"
 [analysis]
 duration = {duration}
 time_step = 0.002
@@ -26,30 +25,44 @@ density = 2400
 young = 2e10
 poisson = 0.2
 [joints.default]
-friction_deg = 40
+friction_deg = {friction}
 [[blocks]]
 id = "ground"
 material = "stone"
 fixed = true
-vertices = [[{a}, -1.0], [{b}, -1.0], [{b}, 0.0], [{a}, 0.0]]
+vertices = [[{a:?}, -1.0], [{b:?}, -1.0], [{b:?}, 0.0], [{a:?}, 0.0]]
 "#,
-        a = -ro - 1.0,
-        b = ro + 1.0
+        a = -half_width,
+        b = half_width
+    )
+}
+
+/// Appends a free stone block `id` of `vertices` (counter-clockwise) to scene `s`.
+fn push_block(s: &mut String, id: &str, vertices: &[[f64; 2]]) {
+    let v: Vec<String> = vertices
+        .iter()
+        .map(|p| format!("[{:.15}, {:.15}]", p[0], p[1]))
+        .collect();
+    let _ = write!(
+        s,
+        "[[blocks]]\nid = \"{id}\"\nmaterial = \"stone\"\nvertices = [{}]\n",
+        v.join(", ")
     );
+}
+
+/// A semicircular arch of `n` voussoirs, centre-line radius 1 m, thickness `t`, on a
+/// fixed base, joints at 40 degrees of friction, deformable stone (E = 20 GPa), for
+/// `duration` s.
+fn arch(n: usize, t: f64, duration: f64) -> String {
+    let (ri, ro) = (1.0 - t / 2.0, 1.0 + t / 2.0);
+    let mut s = stone_scene("arch", duration, 40.0, ro + 1.0);
     for k in 0..n {
         let angle = |j: usize| std::f64::consts::PI * (1.0 - j as f64 / n as f64);
         let (a0, a1) = (angle(k), angle(k + 1));
         // Counter-clockwise: inner at a0, inner at a1, outer at a1, outer at a0.
         let corners = [(ri, a0), (ri, a1), (ro, a1), (ro, a0)];
-        let v: Vec<String> = corners
-            .iter()
-            .map(|&(r, a)| format!("[{:.15}, {:.15}]", r * a.cos(), r * a.sin()))
-            .collect();
-        let _ = write!(
-            s,
-            "[[blocks]]\nid = \"v{k}\"\nmaterial = \"stone\"\nvertices = [{}]\n",
-            v.join(", ")
-        );
+        let v = corners.map(|(r, a)| [r * a.cos(), r * a.sin()]);
+        push_block(&mut s, &format!("v{k}"), &v);
     }
     s
 }
@@ -100,34 +113,16 @@ fn a_thick_arch_stands_and_a_thin_one_collapses_keeping_the_energy() {
 #[test]
 fn a_settled_arch_on_free_piers_under_a_point_load_keeps_the_energy() {
     let (n, ri, ro) = (13usize, 3.0f64, 3.6f64);
-    let mut s = String::from(
-        r#"name = "arch-on-piers"
-[analysis]
-duration = 0.2
-time_step = 0.002
-max_displacement = 0.002
-normal_penalty = 1e10
-gravity = [0.0, -9.81]
-[materials.stone]
-density = 2400
-young = 2e10
-poisson = 0.2
-[joints.default]
-friction_deg = 35
-[[blocks]]
-id = "ground"
-material = "stone"
-fixed = true
-vertices = [[-6.0, -1.0], [6.0, -1.0], [6.0, 0.0], [-6.0, 0.0]]
-[[blocks]]
-id = "pier-right"
-material = "stone"
-vertices = [[3.0, 0.0], [3.6, 0.0], [3.6, 2.0], [3.0, 2.0]]
-[[blocks]]
-id = "pier-left"
-material = "stone"
-vertices = [[-3.6, 0.0], [-3.0, 0.0], [-3.0, 2.0], [-3.6, 2.0]]
-"#,
+    let mut s = stone_scene("arch-on-piers", 0.2, 35.0, 6.0);
+    push_block(
+        &mut s,
+        "pier-right",
+        &[[3.0, 0.0], [3.6, 0.0], [3.6, 2.0], [3.0, 2.0]],
+    );
+    push_block(
+        &mut s,
+        "pier-left",
+        &[[-3.6, 0.0], [-3.0, 0.0], [-3.0, 2.0], [-3.6, 2.0]],
     );
     let at = |r: f64, a: f64| [r * a.cos(), 2.0 + r * a.sin()];
     for k in 0..n {
@@ -144,15 +139,7 @@ vertices = [[-3.6, 0.0], [-3.0, 0.0], [-3.0, 2.0], [-3.6, 2.0]]
         if k == n - 1 {
             (v[2], v[3]) = ([-3.6, 2.0], [-3.0, 2.0]);
         }
-        let v: Vec<String> = v
-            .iter()
-            .map(|p| format!("[{:.15}, {:.15}]", p[0], p[1]))
-            .collect();
-        let _ = write!(
-            s,
-            "[[blocks]]\nid = \"v{k}\"\nmaterial = \"stone\"\nvertices = [{}]\n",
-            v.join(", ")
-        );
+        push_block(&mut s, &format!("v{k}"), &v);
         if k == 9 {
             let p = at(ro - 0.05, 0.5 * (a0 + a1));
             let _ = writeln!(

@@ -110,14 +110,13 @@ impl BlockSystem {
             factors.resize(nb, [0.0; 21]);
             self.stale.fill(true);
         }
-        let view = self.product_view();
         // Each half's blocks factorised (on two threads where set); true if all were
         // positive definite.
         let factorise = |factors: &mut [Packed], stale: &[bool], first: usize| {
             let mut definite = true;
             for (j, (l, &stale)) in factors.iter_mut().zip(stale).enumerate() {
                 if stale {
-                    match cholesky(&view.diagonal_block(first + j), nd) {
+                    match cholesky(&self.diagonal_block(first + j), nd) {
                         Some(f) => *l = f,
                         None => definite = false,
                     }
@@ -125,7 +124,7 @@ impl BlockSystem {
             }
             definite
         };
-        let half = view.half;
+        let half = nb / 2;
         let (l0, l1) = factors.split_at_mut(half);
         let (st0, st1) = self.stale.split_at(half);
         let mut definite = [true; 2];
@@ -267,6 +266,20 @@ impl BlockSystem {
             .seal(self.nd, &self.col_start, &self.col_rows);
     }
 
+    /// Block position `j`'s diagonal block of K, in full.
+    fn diagonal_block(&self, j: usize) -> Mat6 {
+        let (nd, e) = (self.nd, self.col_start[j]);
+        let mut k = [[0.0; 6]; 6];
+        for q in 0..nd {
+            let base = self.entry_col[e * nd + q];
+            for (a, v) in self.values[base..base + nd - q].iter().enumerate() {
+                k[q + a][q] = *v;
+                k[q][q + a] = *v;
+            }
+        }
+        k
+    }
+
     /// What a product with K reads.
     fn product_view(&self) -> ProductView<'_> {
         ProductView {
@@ -276,8 +289,6 @@ impl BlockSystem {
             values: Some(&self.values),
             couplings: &self.couplings,
             terms: &self.couplings.terms,
-            col_start: &self.col_start,
-            entry_col: &self.entry_col,
         }
     }
 
@@ -450,28 +461,9 @@ struct ProductView<'a> {
     /// scaled system's).
     couplings: &'a Couplings,
     terms: &'a Terms,
-    col_start: &'a [usize],
-    entry_col: &'a [usize],
 }
 
 impl ProductView<'_> {
-    /// Block `j`'s diagonal block of K, in full.
-    fn diagonal_block(&self, j: usize) -> Mat6 {
-        let (nd, e) = (self.nd, self.col_start[j]);
-        let Some(values) = self.values else {
-            return std::array::from_fn(|i| std::array::from_fn(|k| f64::from(u8::from(i == k))));
-        };
-        let mut k = [[0.0; 6]; 6];
-        for q in 0..nd {
-            let base = self.entry_col[e * nd + q];
-            for (a, v) in values[base..base + nd - q].iter().enumerate() {
-                k[q + a][q] = *v;
-                k[q][q + a] = *v;
-            }
-        }
-        k
-    }
-
     /// Half `h`'s rows of y = K x into `y` (those rows alone), `x` given by halves;
     /// returns x . y over the rows.
     fn product(&self, h: usize, x: [&[f64]; 2], y: &mut [f64]) -> f64 {
@@ -1304,9 +1296,8 @@ mod tests {
         for nd in [3usize, 6] {
             let (sys, dense) = coupled(nd);
             let (nb, n) = (sys.nb, sys.nb * nd);
-            let view = sys.product_view();
             let factors: Vec<Packed> = (0..nb)
-                .map(|j| cholesky(&view.diagonal_block(j), nd).unwrap())
+                .map(|j| cholesky(&sys.diagonal_block(j), nd).unwrap())
                 .collect();
             let scale = |threads: bool| {
                 let mut terms = Terms::default();
