@@ -5,7 +5,7 @@
 use super::outdir::{check_run_folder, output_error};
 use super::{Failure, bad, validate};
 use dda::report::{
-    Frame, Report, frame_svg, frame_view, parse_bolts, parse_history, parse_points, report_html,
+    Frame, Report, frame_svg, parse_bolts, parse_history, parse_points, report_html, run_view,
 };
 use dda_core::{Model, Scene, Summary};
 use std::path::Path;
@@ -75,7 +75,7 @@ pub fn render_outputs(
     // The per-step tables a scene may call for, when the run has them.
     let points = read_table(dir, "measurements.csv", parse_points)?;
     let bolts = read_table(dir, "bolts.csv", parse_bolts)?;
-    let view = frame_view(model);
+    let view = run_view(model, &frames);
     let frames_dir = dir.join("frames");
     // The folder holds only our pictures (checked before: `check_run_folder` or a
     // staging folder of ours); they are drawn anew.

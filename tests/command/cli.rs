@@ -157,6 +157,55 @@ fn run_writes_summary_history_and_frames() {
     }
 }
 
+/// The world box (min x, min y, max x, max y) an SVG frame shows: its inner viewBox,
+/// "min_x -max_y width height" (y up in the world, down in SVG).
+fn frame_box(svg: &str) -> [f64; 4] {
+    let at = svg.rfind("viewBox=\"").unwrap() + "viewBox=\"".len();
+    let v: Vec<f64> = svg[at..]
+        .split('"')
+        .next()
+        .unwrap()
+        .split_whitespace()
+        .map(|x| x.parse().unwrap())
+        .collect();
+    [v[0], -v[1] - v[3], v[0] + v[2], -v[1]]
+}
+
+/// A block that travels far from its start stays in every picture: the frames' view
+/// holds where the run took it, not only where it started. The slider (1 m square) runs
+/// 4 m along a frictionless base, four times its size, so a view of the start with its
+/// quarter margin would lose it.
+#[test]
+fn pictures_show_a_block_that_travels_beyond_its_start() {
+    let dir = scratch("travel");
+    let file = variant(
+        &dir,
+        "far.toml",
+        &[
+            ("velocity = [1.0, 0.0]", "velocity = [10.0, 0.0]"),
+            ("friction_deg = 20.0", "friction_deg = 0.0"),
+            ("duration = 0.2", "duration = 0.4"),
+        ],
+    );
+    let out = dir.join("out");
+    let o = run_file(&file, &out, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let c = &summary(&out)["blocks"][1]["centroid"];
+    let (x, y) = (c[0].as_f64().unwrap(), c[1].as_f64().unwrap());
+    assert!(x > 3.5, "the slider went {x} m, not 4");
+    let pictures: Vec<_> = std::fs::read_dir(out.join("frames"))
+        .unwrap()
+        .map(|f| std::fs::read_to_string(f.unwrap().path()).unwrap())
+        .collect();
+    assert!(pictures.len() > 1);
+    for svg in &pictures {
+        let b = frame_box(svg);
+        // The whole slider, start and end, with room around it.
+        assert!(b[0] < 0.0 && b[2] > x + 0.5, "{b:?} misses x = {x}");
+        assert!(b[1] < y - 0.5 && b[3] > y + 0.5, "{b:?} misses y = {y}");
+    }
+}
+
 #[test]
 fn same_scene_twice_gives_identical_summaries_apart_from_timing() {
     let dir = scratch("twice");

@@ -4,7 +4,7 @@
 //! (`docs/results/examples/NAME-start.svg`, `-end.svg`).
 
 use dda_core::{RunOptions, Scene, Simulation};
-use dda_report::{Frame, frame_resolution, frame_svg, frame_view};
+use dda_report::{Frame, frame_resolution, frame_svg, frame_view, run_view};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -38,15 +38,17 @@ pub fn run(root: &Path) -> Result<(), String> {
         let text =
             std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
         let (_, model) = Scene::load(&path).map_err(|e| e.to_string())?;
-        let view = frame_view(&model);
-        let resolution = frame_resolution(&view);
+        let resolution = frame_resolution(&frame_view(&model));
         let free = model.blocks.iter().filter(|b| !b.fixed).count();
         let bodies = model.blocks.iter().filter(|b| b.body.is_some()).count();
         let mut sim = Simulation::new(model.clone(), RunOptions::default());
-        let start = frame_svg(&model, &Frame::of(&sim, true, resolution), &view);
+        let start = Frame::of(&sim, true, resolution);
         sim.run(|_, _| {}).map_err(|e| format!("{name}: {e}"))?;
-        let end = frame_svg(&model, &Frame::of(&sim, true, resolution), &view);
-        for (which, svg) in [("start", start), ("end", end)] {
+        let end = Frame::of(&sim, true, resolution);
+        // Both pictures in one view, which holds the blocks at the start and the end.
+        let view = run_view(&model, &[start.clone(), end.clone()]);
+        for (which, frame) in [("start", start), ("end", end)] {
+            let svg = frame_svg(&model, &frame, &view);
             let file = pictures.join(format!("{name}-{which}.svg"));
             std::fs::write(&file, svg).map_err(|e| format!("{}: {e}", file.display()))?;
         }

@@ -289,9 +289,18 @@ pub fn drawn_edges(model: &Model) -> Vec<Option<Vec<(usize, f64, f64)>>> {
         .collect()
 }
 
-/// The box every frame of a run shows: the free blocks' extent at the start with a
-/// margin of a quarter of its size (room to move), or every block's if none is free.
+/// The box every frame of a run shows before the run: the free blocks' extent at the
+/// start with a margin of a quarter of its size (room to move), or every block's if none
+/// is free. It sets the rounding of the frames a run writes ([`frame_resolution`]);
+/// the pictures drawn after the run take [`run_view`], which also holds where the blocks
+/// went.
 pub fn frame_view(model: &Model) -> Aabb {
+    let b = start_box(model);
+    b.expanded(start_margin(&b))
+}
+
+/// The free blocks' extent at the start, or every block's if none is free.
+fn start_box(model: &Model) -> Aabb {
     let free: Vec<Aabb> = model
         .blocks
         .iter()
@@ -299,14 +308,42 @@ pub fn frame_view(model: &Model) -> Aabb {
         .map(|m| m.polygon.aabb())
         .collect();
     let all: Vec<Aabb> = model.blocks.iter().map(|m| m.polygon.aabb()).collect();
-    let b = if free.is_empty() { all } else { free }
+    if free.is_empty() { all } else { free }
         .into_iter()
         .reduce(|a, b| a.union(&b))
         .unwrap_or(Aabb {
             min: glam::DVec2::ZERO,
             max: glam::DVec2::ONE,
-        });
-    b.expanded(0.25 * b.size().max_element())
+        })
+}
+
+/// The margin of the view around the blocks: a quarter of the start box's larger side.
+fn start_margin(start: &Aabb) -> f64 {
+    0.25 * start.size().max_element()
+}
+
+/// The box a run's pictures and report show: the free blocks' extent at the start and in
+/// every frame, with [`frame_view`]'s margin. A block that travels far from where it
+/// started (a rockfall down its slope, a slide) stays in the picture; a run whose blocks
+/// stay near their start shows [`frame_view`] itself.
+pub fn run_view(model: &Model, frames: &[Frame]) -> Aabb {
+    let start = start_box(model);
+    let free: Vec<usize> = (0..model.blocks.len())
+        .filter(|&k| !model.blocks[k].fixed)
+        .collect();
+    let mut b = start;
+    for f in frames {
+        for &k in &free {
+            let Some(xy) = f.blocks.get(k) else { continue };
+            for p in xy.chunks_exact(2) {
+                let p = DVec2::new(p[0], p[1]);
+                if p.is_finite() {
+                    b = b.union(&Aabb { min: p, max: p });
+                }
+            }
+        }
+    }
+    b.expanded(start_margin(&start))
 }
 
 /// The rounding of frame coordinates for a run shown in `view`: a millionth of its size.
