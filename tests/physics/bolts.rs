@@ -1,7 +1,8 @@
 //! Rock bolts and measured points (docs/scene-format.md, "Bolts and measured points"):
 //! a block hanging from a bolt stretches it by its weight over the stiffness; a bolt
 //! weaker than the weight breaks at the first step and the block falls freely; a bolt
-//! across a sliding plane holds a block that slides without it.
+//! across a sliding plane holds a block that slides without it; a measured point in
+//! rock an excavation removes ends with it, and the scene warns of it.
 
 // A panic is how a test reports failure.
 #![allow(clippy::unwrap_used)]
@@ -184,4 +185,37 @@ vertices = [{}, {}, {}, {}]
     );
     let held = slide(&scene(&bolt));
     assert!(held < 2e-3, "moved {held} m with the bolt");
+}
+
+/// A measured point in rock an excavation removes is followed until the removal and has
+/// no rows after it, and the scene warns of it; a bolt with an end there is warned of
+/// too (it goes with the rock). The hanging block's lower half (below y = -1, the
+/// measured foot in it) is excavated at 0.1 s; in a second scene the bolt's lower end
+/// is moved into that half.
+#[test]
+fn a_point_in_excavated_rock_ends_with_it_and_is_warned_of() {
+    let excavation = r#"
+[[excavations]]
+id = "cut"
+vertices = [[-1.0, -2.0], [1.0, -2.0], [1.0, -1.0], [-1.0, -1.0]]
+at = 0.1
+"#;
+    let text = hanging("dynamic", 1e7, "", 0.2, 0.01) + excavation;
+    let (_, model) = Scene::parse(&text, Format::Toml, "h.toml").unwrap();
+    let keys: Vec<&str> = model.warnings.iter().map(|w| w.key.as_str()).collect();
+    assert!(keys.contains(&"measure[0].at"), "{keys:?}");
+    assert!(!keys.iter().any(|k| k.starts_with("bolts")), "{keys:?}");
+    let mut sim = Simulation::new(model, RunOptions::default());
+    let mut rows = Vec::new();
+    sim.run(|s, _| rows.push((s.time(), dda::report::measurement_rows(s).len())))
+        .unwrap();
+    assert!(rows.iter().any(|&(t, _)| t > 0.15), "the run goes on");
+    for (t, n) in rows {
+        assert_eq!(n, usize::from(t < 0.1 - 1e-12), "{n} rows at t = {t}");
+    }
+
+    let moved = text.replace("to = [0.0, -0.6]", "to = [0.0, -1.2]");
+    let (_, model) = Scene::parse(&moved, Format::Toml, "h.toml").unwrap();
+    let bolt = model.warnings.iter().find(|w| w.key == "bolts[0].to");
+    assert!(bolt.is_some_and(|w| w.message.contains("the bolt goes with it")));
 }

@@ -314,6 +314,13 @@ impl Scene {
                 })
             })
             .collect::<Result<Vec<_>, Invalid>>()?;
+        for (i, m) in measures.iter().enumerate() {
+            warnings.extend(excavated_end(
+                &format!("measure[{i}].at"),
+                &blocks[m.block],
+                "its rows in measurements.csv end then",
+            ));
+        }
         let mut ids = BTreeMap::new();
         for (i, m) in measures.iter().enumerate() {
             if let Some(j) = ids.insert(m.id.as_str(), i) {
@@ -350,6 +357,13 @@ impl Scene {
                 return Err(invalid(
                     format!("{key}.to"),
                     "the two ends coincide: a bolt needs a length",
+                ));
+            }
+            for (end, at) in [("from", from.0), ("to", to.0)] {
+                warnings.extend(excavated_end(
+                    &format!("{key}.{end}"),
+                    &blocks[at],
+                    "the bolt goes with it",
                 ));
             }
             let stiffness = within(&format!("{key}.stiffness"), b.stiffness, &limits::PENALTY)?;
@@ -504,6 +518,21 @@ impl Scene {
         }
         Ok(Some(GroundMotion::new(&spec.samples, scale, list)))
     }
+}
+
+/// A warning for the point of `key` where it lies in `block` and an excavation removes
+/// that block: what the point carries (`then`) ends with it. A point meant to stay, a
+/// bolt's anchor or a point on a tunnel's wall, placed a little inside the outline
+/// excavated, most likely.
+fn excavated_end(key: &str, block: &ModelBlock, then: &str) -> Option<Invalid> {
+    let t = block.removed_at?;
+    Some(invalid(
+        key,
+        format!(
+            "lies in block `{}`, which an excavation removes at {t} s: {then}",
+            block.id
+        ),
+    ))
 }
 
 /// The block holding `at` (key `key`): the first, in scene order, whose outline contains

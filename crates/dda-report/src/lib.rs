@@ -27,12 +27,14 @@ pub const MEASUREMENTS_HEADER: &str = "t,id,block,x,y,ux,uy,vx,vy,sxx,syy,sxy";
 
 /// The rows of measurements.csv for the state of `sim` now: each measured point's time
 /// (s), id, block, position (m), displacement since the start (m), velocity (m/s) and
-/// its block's stress (Pa, tension positive).
+/// its block's stress (Pa, tension positive); none for a point whose block an
+/// excavation has removed.
 pub fn measurement_rows(sim: &Simulation) -> Vec<String> {
     let t = format!("{:e}", sim.time());
     sim.model()
         .measures
         .iter()
+        .filter(|m| !sim.is_removed(m.block))
         .map(|m| {
             let p = sim.material_point(m.block, m.at);
             let v = sim.material_velocity(m.block, m.at);
