@@ -1,10 +1,12 @@
 //! The engine's physics across the layers: the paper's section 4 hard cases with every
-//! detector (reviewed snapshots), its two-set columns with every detector, a jointed slope written as a region, random hard pairs, structures on flush joints, and
+//! detector (reviewed snapshots), its two-set columns with every detector, a jointed slope written as a region, random hard pairs, structures on flush joints, bonded
+//! joints, and
 //! bit-identical resume and thread counts. One test binary, so that the suite links once
 //! for all of them.
 
 mod arches;
 mod bolts;
+mod bonds;
 mod columns;
 mod flush_joints;
 mod hard_cases;

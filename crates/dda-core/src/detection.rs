@@ -24,8 +24,9 @@ pub(crate) const GLUE_SEAM: f64 = 1e-3;
 impl Simulation {
     /// Step-start detection with states inherited from the previous step, then the
     /// engine's normalisation: closed contacts of frictionless joints slide (no shear
-    /// spring), at t = 0 closed contacts of bonding joints start bonded, and active
-    /// contacts between parts of one body are locked and bonded.
+    /// spring), contacts of bonding joints whose blocks touch as the scene wrote them
+    /// start bonded, and active contacts between parts of one body are locked and
+    /// bonded.
     pub(crate) fn detect_step_start(&mut self) {
         self.scratch.aabbs.clear();
         self.scratch
@@ -54,12 +55,33 @@ impl Simulation {
         let first = self.state.totals.steps == 0;
         let glue = self.model.joints_by_edge;
         let close_touching = first && self.close_touching;
+        // The first detection of the blocks as the scene wrote them: the settling's first
+        // static step, or the run's first step where nothing settled them. Contacts of
+        // bonding joints that touch then start bonded.
+        let bond_touching = first && self.settling.is_none();
+        let touch = GLUE_SEAM * self.detection.d_tol;
         let open_band = self.open_band();
         for k in 0..self.state.contacts.contacts.len() {
-            let c = self.state.contacts.contacts[k];
-            // Only closed contacts, and with glue or closing the touching ones active
-            // ones, need their joint.
-            if !(c.state.is_closed() || (glue || close_touching) && c.active) {
+            let mut c = self.state.contacts.contacts[k];
+            // A bond holds only while its contact is closed: the contact law unbonds one
+            // it opens, and one that was not closed (the twin of a bonded corner, where
+            // the other block's corner carried the bond, or one the detector dropped)
+            // has none either. Glue keeps its own bonds (below).
+            let stale = c.bonded && !c.state.is_closed() && !bond_touching;
+            if stale && !(glue && self.joint(k).glued) {
+                self.state.contacts.contacts[k].bonded = false;
+                continue;
+            }
+            // A bonded contact the detector left inactive because its vertex passed its
+            // edge's end, at the corner of a bonded face as its blocks turn or strain,
+            // holds there until the contact law breaks it (as a seam's end does).
+            if c.bonded && c.state.is_closed() && !c.active && self.at_seam_end(&c) {
+                self.state.contacts.contacts[k].active = true;
+                c.active = true;
+            }
+            // Only closed contacts, and with glue, closing the touching ones or bonding
+            // them active ones, need their joint.
+            if !(c.state.is_closed() || (glue || close_touching || bond_touching) && c.active) {
                 continue;
             }
             let j = self.joint(k);
@@ -85,6 +107,22 @@ impl Simulation {
                 }
                 continue;
             }
+            // A contact of a bonding joint whose blocks touch at the start (its vertex on
+            // the edge's line within GLUE_SEAM of d_tol, or past it) is bonded and locked
+            // where it is, unloaded: the rock holds across it until its tensile strength
+            // or its cohesion and friction give way. A corner against a corner of the
+            // type-based detectors has no contact length, and so no bond.
+            if bond_touching && c.active && !c.vertex_vertex && j.bonds() && c.d_n <= touch {
+                let c = &mut self.state.contacts.contacts[k];
+                c.state = if j.has_shear() {
+                    ContactState::Locked
+                } else {
+                    ContactState::Sliding
+                };
+                c.locked_r = c.r.clamp(0.0, 1.0);
+                c.bonded = true;
+                continue;
+            }
             // Open contacts are left as they are, but for the settling's touching ones.
             if !c.state.is_closed() {
                 if close_touching && c.active && c.d_n <= open_band {
@@ -102,9 +140,6 @@ impl Simulation {
             if !j.has_shear() {
                 c.state = ContactState::Sliding;
             }
-            if first && c.active && c.state.is_closed() && j.bonds() {
-                c.bonded = true;
-            }
         }
         self.scratch.track_list.rebuild(
             self.detector.as_ref(),
@@ -114,9 +149,9 @@ impl Simulation {
     }
 
     /// Whether bonded contact `c`, active at the end of the last step, still holds its
-    /// seam though the detector left it inactive because its vertex passed its edge's
-    /// end: the vertex lies within d_tol of the edge's line and past the end by at most
-    /// d_tol. Parts of one body meet at the ends of a seam corner to corner (r = 0 or
+    /// seam (or bonded face) though the detector left it inactive because its vertex
+    /// passed its edge's end: the vertex lies within d_tol of the edge's line and past
+    /// the end by at most d_tol. Parts of one body meet at the ends of a seam corner to corner (r = 0 or
     /// 1), where rounding and the parts' strain take the vertex past the edge's end; the
     /// seam's spring there must go on, or the parts press into each other unheld (found
     /// on a jointed pit wall under a quake: a sliver part's seam end went 2.8 mm deep in

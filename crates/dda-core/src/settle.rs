@@ -19,7 +19,9 @@
 //! holds, and of one that slides (friction at its limit, the normal force of the
 //! accelerated blocks). The steps go on until every vertex moves in a step as it moved
 //! in the step before (settled, or sliding steadily) to [`SETTLE_TOLERANCE`] of the
-//! first step's motion, until that stops improving ([`SETTLE_STALL`]), or for
+//! first step's motion, or as in the step two before (a flicker of period two, a
+//! contact at a junction switched on and off in turn: the steady motion is the mean of
+//! the two), until that stops improving ([`SETTLE_STALL`]), or for
 //! [`SETTLE_MAX_STEPS`] in all. Blocks that rest on nothing (in flight) are held where
 //! they are; the ground is still; and nothing is excavated (the settling's steps take
 //! time of their own, before t = 0, and would pass the excavations of the run).
@@ -43,7 +45,8 @@
 //! mechanism, [`Simulation::was_a_slide`]).
 //!
 //! The run then starts from the settled places, stresses and contacts (their springs
-//! loaded, shear springs anchored where they were, glued seams bonded) with the blocks'
+//! loaded, shear springs anchored where they were, glued seams bonded, and the bonds of
+//! joints with cohesion or tension that the settling did not break) with the blocks'
 //! own velocities. The work gravity and the loads did while settling, net of the way
 //! back, is added to the energy the physics guard counts as supplied.
 //!
@@ -318,17 +321,14 @@ impl Simulation {
             self.scratch.shapes[i] = BlockShape::new(&b.polygon);
         }
         // The settled contacts, their shear springs anchored where they were and sliding
-        // ones sliding: each joint goes on carrying the force it settled with.
+        // ones sliding: each joint goes on carrying the force it settled with. Bonds
+        // too: the contacts that touched as the scene wrote them bonded at the
+        // settling's first static step (as they would at the run's first step without
+        // it), and those the settling's loads broke stay broken. The seams of glued
+        // parts stay bonded where they settled: loaded, a seam may lie further off its
+        // edge's line than a first step would bond (and a seam not bonded is no contact
+        // at all: the parts passed into each other).
         self.state.contacts = settling.state.contacts;
-        for k in 0..self.state.contacts.contacts.len() {
-            // Bonding joints bond at the run's first step, as without settling. The seams
-            // of glued parts stay bonded where they settled: loaded, a seam may lie
-            // further off its edge's line than the run's first step would bond (and a
-            // seam not bonded is no contact at all: the parts passed into each other).
-            if !self.joint(k).glued {
-                self.state.contacts.contacts[k].bonded = false;
-            }
-        }
         self.settling = Some(report);
         self.state.energy.supplied += work;
         self.state.energy.supplied_max = self
@@ -450,6 +450,10 @@ impl Simulation {
         // steps cut and grown back compare), from `before` if given; the first step's
         // largest; the smallest change from step to step so far, and its step.
         let mut last: Vec<DVec2> = before.map(<[DVec2]>::to_vec).unwrap_or_default();
+        // The motion two steps back, and each block's translation and turn in the step
+        // before (a flicker of period two, below).
+        let mut last2: Vec<DVec2> = Vec::new();
+        let (mut steady_before, mut spin_before) = (Vec::new(), Vec::new());
         let mut first = scale;
         let (mut best, mut best_at) = (f64::INFINITY, 0);
         let mut report = Relaxed {
@@ -489,6 +493,17 @@ impl Simulation {
                     .map(|(a, b)| (*a - *b).length())
                     .fold(0.0, f64::max)
             };
+            let change2 = if last2.is_empty() {
+                f64::INFINITY
+            } else {
+                motion
+                    .iter()
+                    .zip(&last2)
+                    .map(|(a, b)| (*a - *b).length())
+                    .fold(0.0, f64::max)
+            };
+            steady_before.clone_from(&report.steady);
+            spin_before.clone_from(&report.spin);
             // The translation of the step, block by block (see `rewind`).
             for (i, slid) in report.slide.iter_mut().enumerate() {
                 if self.free[i].is_some() {
@@ -512,12 +527,27 @@ impl Simulation {
                 report.converged = true;
                 break;
             }
+            if change2 <= SETTLE_TOLERANCE * scale {
+                // A flicker of period two: the motion repeats every other step, a contact
+                // switched on in one and off in the next (a vertex at the end of an edge,
+                // where blocks meet at a junction, taken past it by its spring and back
+                // by its load). The loads are as settled as they will be; the blocks'
+                // steady motion is the mean of the two steps', and the next step repeats
+                // the one before this.
+                for (i, (t, w)) in report.steady.iter_mut().zip(&mut report.spin).enumerate() {
+                    *t = 0.5 * (*t + steady_before[i]);
+                    *w = 0.5 * (*w + spin_before[i]);
+                }
+                report.last = last;
+                report.converged = true;
+                break;
+            }
             if change <= 0.5 * best {
                 (best, best_at) = (change, n);
             } else if n - best_at >= SETTLE_STALL {
                 break;
             }
-            last = motion;
+            last2 = std::mem::replace(&mut last, motion);
         }
         Ok(report)
     }

@@ -1,0 +1,106 @@
+//! Bonded joints (docs/scene-format.md, `[joints.NAME]`): contacts whose blocks touch as
+//! the scene wrote them start bonded, and hold by their cohesion and tensile strength
+//! until these give way. A block hanging from a roof by its bond alone stays while the
+//! bond's strength exceeds its weight and falls when it is short of it; a cantilever
+//! bonded to a fixed block holds, its joint's corners turning under the moment, and
+//! falls when the joint is weak. With and without the settling.
+
+// A panic is how a test reports failure.
+#![allow(clippy::unwrap_used)]
+
+use dda::core::{Format, RunOptions, Scene, Simulation};
+
+const P: f64 = 1e10;
+const DENSITY: f64 = 2600.0;
+const G: f64 = 9.81;
+
+/// A scene of two blocks on gravity, the first fixed, their joint with `strength` Pa
+/// of cohesion and tensile strength and friction 35 degrees, run for `duration` s.
+fn scene(fixed: &str, free: &str, strength: f64, settle: bool, duration: f64) -> String {
+    format!(
+        r#"
+name = "bond"
+[analysis]
+duration = {duration}
+time_step = 0.002
+max_displacement = 0.005
+normal_penalty = {P:e}
+gravity = [0.0, -{G}]
+settle = {settle}
+[materials.rock]
+density = {DENSITY}
+young = 1e10
+poisson = 0.25
+[joints.default]
+friction_deg = 35.0
+cohesion = {strength:e}
+tensile_strength = {strength:e}
+[[blocks]]
+id = "fixed"
+material = "rock"
+fixed = true
+vertices = {fixed}
+[[blocks]]
+id = "free"
+material = "rock"
+vertices = {free}
+"#
+    )
+}
+
+/// The free block's largest vertex drop (m) over the run of `text`.
+fn largest_drop(text: &str) -> f64 {
+    let (_, model) = Scene::parse(text, Format::Toml, "bond.toml").unwrap();
+    let start: Vec<_> = model.blocks[1].polygon.vertices().to_vec();
+    let mut sim = Simulation::new(model, RunOptions::default());
+    let mut drop = 0.0f64;
+    sim.run(|s, _| {
+        for (a, b) in start.iter().zip(s.blocks()[1].polygon.vertices()) {
+            drop = drop.max(a.y - b.y);
+        }
+    })
+    .unwrap();
+    drop
+}
+
+/// A 1 m square block under a fixed roof of the same width, held by their bond alone:
+/// weight W = 2600 x 9.81 = 25.5 kN over a 1 m face. Its bonded contacts are the
+/// corners' vertex-edge pairs, each holding its tensile strength over half its 1 m
+/// edge. With a strength of 2 W per metre, any two of them sharing the weight hold
+/// it, stretched by at most 2 W / p (a load applied at once, on one spring: 5e-6 m);
+/// with W / 4, all four together hold W / 2: the block falls, g t^2 / 2 = 1.23 m in
+/// 0.5 s, less the steps the bond held it.
+#[test]
+fn a_block_hangs_from_its_bond_while_the_bond_is_stronger_than_its_weight() {
+    let roof = "[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]";
+    let block = "[[0.0, -1.0], [1.0, -1.0], [1.0, 0.0], [0.0, 0.0]]";
+    let w = DENSITY * G;
+    for settle in [false, true] {
+        let held = largest_drop(&scene(roof, block, 2.0 * w, settle, 0.5));
+        assert!(held <= 2.0 * w / P, "settle {settle}: dropped {held} m");
+        let fell = largest_drop(&scene(roof, block, 0.25 * w, settle, 0.5));
+        assert!(fell > 1.0, "settle {settle}: dropped {fell} m");
+    }
+}
+
+/// A 1 m x 0.5 m block bonded by its end face to a fixed block of the same height,
+/// standing out as a cantilever: at the joint a moment M = w L^2 / 2 = 6.4 kN m (w =
+/// 2600 x 9.81 x 0.5 N/m, L = 1 m), a tension at the top corner of about M / h =
+/// 12.8 kN and a shear of w L = 12.8 kN. With a strength of 1e6 Pa each corner
+/// contact holds 250 kN of either: the joint holds, its top corner opening by at most
+/// 2 M / (h p) (a load applied at once, on one spring), so the tip drops by at most
+/// that over h times L, 1e-5 m, plus the block's bending w L^4 / (8 E I) = 1.5e-5 m:
+/// 1e-4 m bounds both. Its corners turn with the block, so that the vertex of a
+/// corner's contact passes its edge's end: the bond must hold there. With 1e3 Pa each
+/// contact holds 250 N: the block breaks off and falls.
+#[test]
+fn a_bonded_cantilever_holds_while_its_joint_is_strong_enough() {
+    let wall = "[[-1.0, 0.0], [0.0, 0.0], [0.0, 0.5], [-1.0, 0.5]]";
+    let beam = "[[0.0, 0.0], [1.0, 0.0], [1.0, 0.5], [0.0, 0.5]]";
+    for settle in [false, true] {
+        let held = largest_drop(&scene(wall, beam, 1e6, settle, 0.5));
+        assert!(held <= 1e-4, "settle {settle}: the tip dropped {held} m");
+        let fell = largest_drop(&scene(wall, beam, 1e3, settle, 0.5));
+        assert!(fell > 0.5, "settle {settle}: dropped {fell} m");
+    }
+}
