@@ -102,9 +102,7 @@ impl Scene {
                 continue;
             };
             let find = |m: &str| {
-                mat_index(m).ok_or_else(|| {
-                    invalid(format!("{key}.between"), format!("no material named `{m}`"))
-                })
+                mat_index(m).ok_or_else(|| no_material(&format!("{key}.between"), m, self))
             };
             let (a, b) = (find(m1)?, find(m2)?);
             joints.push(j.validate(&key)?);
@@ -131,24 +129,8 @@ impl Scene {
                     format!("duplicate block id `{}` (also blocks[{first}])", b.id),
                 ));
             }
-            let material = mat_index(&b.material).ok_or_else(|| {
-                invalid(
-                    format!("{key}.material"),
-                    format!(
-                        "no material named `{}` (defined: {})",
-                        b.material,
-                        if names.is_empty() {
-                            "none".to_string()
-                        } else {
-                            names
-                                .iter()
-                                .map(|s| s.as_str())
-                                .collect::<Vec<_>>()
-                                .join(", ")
-                        }
-                    ),
-                )
-            })?;
+            let material = mat_index(&b.material)
+                .ok_or_else(|| no_material(&format!("{key}.material"), &b.material, self))?;
             let mut block = b.validate(&key, material)?;
             if !b.edge_joints.is_empty() {
                 if b.edge_joints.len() != b.vertices.len() {
@@ -533,6 +515,23 @@ fn excavated_end(key: &str, block: &ModelBlock, then: &str) -> Option<Invalid> {
             block.id
         ),
     ))
+}
+
+/// The error of key `key` naming material `name`, which `scene` does not define: the
+/// materials it does define, so that a misspelt name is seen at once.
+pub(crate) fn no_material(key: &str, name: &str, scene: &Scene) -> Invalid {
+    let defined: Vec<&str> = scene.materials.keys().map(String::as_str).collect();
+    invalid(
+        key,
+        format!(
+            "no material named `{name}` (defined: {})",
+            if defined.is_empty() {
+                "none".to_string()
+            } else {
+                defined.join(", ")
+            }
+        ),
+    )
 }
 
 /// The block holding `at` (key `key`): the first, in scene order, whose outline contains

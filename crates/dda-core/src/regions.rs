@@ -185,6 +185,13 @@ pub fn expand(scene: &Scene) -> Result<(Scene, Dropped), Invalid> {
         if r.id.trim().is_empty() {
             return Err(invalid(format!("{key}.id"), "must not be empty"));
         }
+        if !scene.materials.contains_key(&r.material) {
+            return Err(crate::model::no_material(
+                &format!("{key}.material"),
+                &r.material,
+                scene,
+            ));
+        }
         let shape = region_outline(&key, &r.id, &r.vertices)?;
         let own: Vec<ConvexPolygon> = shape
             .convex_parts()

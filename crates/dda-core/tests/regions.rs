@@ -63,7 +63,7 @@ fn a_region_is_cut_into_blocks_named_after_it() {
 
 #[test]
 fn bad_regions_and_sets_are_named_with_key_and_line() {
-    let cases: [(&str, &str, &str, &str, usize); 11] = [
+    let cases: [(&str, &str, &str, &str, usize); 12] = [
         // (line to replace, replacement, expected key, words in the message, nth line)
         (
             "joint_sets = [\"bedding\", \"cross\"]",
@@ -136,6 +136,15 @@ fn bad_regions_and_sets_are_named_with_key_and_line() {
             "regions[1].joint_sets",
             "wrong unit",
             0,
+        ),
+        (
+            // The slope's material misspelt: named on the region, not on a block it is
+            // cut into (which has no line of its own).
+            "material = \"rock\"",
+            "material = \"rocks\"",
+            "regions[1].material",
+            "no material named `rocks` (defined: rock)",
+            1,
         ),
         (
             // Every piece of the slope (a few m^2 each) below its min_area.
