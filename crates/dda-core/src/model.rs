@@ -1007,7 +1007,16 @@ pub struct ModelBlock {
 
 impl BlockSpec {
     fn validate(&self, key: &str, material: usize) -> Result<ModelBlock, Invalid> {
-        let polygon = outline(key, &self.vertices, |e| format!("block `{}`: {e}", self.id))?;
+        let polygon = outline(key, &self.vertices, |e| match e {
+            // A block must be convex, but the rock need not be: say how to write it.
+            PolygonError::NotConvex { .. } => format!(
+                "block `{}`: {e} (a block must be convex: write a non-convex piece of rock \
+                 as a [[regions]] outline, which is cut into glued convex parts, or as \
+                 convex blocks sharing a `body`)",
+                self.id
+            ),
+            _ => format!("block `{}`: {e}", self.id),
+        })?;
         let mut velocity = [0.0; 6];
         if let Some(v) = &self.velocity {
             each_within(&format!("{key}.velocity"), v, &limits::SPEED)?;

@@ -100,6 +100,8 @@ fn bad_block_geometry_names_the_vertex() {
     let e = error(&text);
     assert!(e.key.starts_with("blocks[1].vertices"), "{e}");
     assert!(e.message.contains("slider"), "{e}");
+    // The way to write rock that is not convex.
+    assert!(e.message.contains("[[regions]]"), "{e}");
     assert_eq!(
         e.line,
         Some(line_of(&text, "vertices = [[0.0, 1.0]")),
