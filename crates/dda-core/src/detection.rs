@@ -151,13 +151,13 @@ impl Simulation {
     /// Whether bonded contact `c`, active at the end of the last step, still holds its
     /// seam (or bonded face) though the detector left it inactive because its vertex
     /// passed its edge's end: the vertex lies within d_tol of the edge's line and past
-    /// the end by at most d_tol. Parts of one body meet at the ends of a seam corner to corner (r = 0 or
-    /// 1), where rounding and the parts' strain take the vertex past the edge's end; the
-    /// seam's spring there must go on, or the parts press into each other unheld (found
-    /// on a jointed pit wall under a quake: a sliver part's seam end went 2.8 mm deep in
-    /// five steps, and the spring that took it up again created 6% of the reference
-    /// energy). A seam contact the detector left inactive for another reason (the other
-    /// block's face carries the seam) stays so.
+    /// the end by at most d_tol. Parts of one body meet at the ends of a seam corner to
+    /// corner (r = 0 or 1), where rounding and the parts' strain take the vertex past
+    /// the edge's end; the seam's spring there must go on, or the parts press into each
+    /// other unheld (found on a jointed pit wall under a quake: a sliver part's seam end
+    /// went 2.8 mm deep in five steps, and the spring that took it up again created 6%
+    /// of the reference energy). A seam contact the detector left inactive for another
+    /// reason (the other block's face carries the seam) stays so.
     fn at_seam_end(&self, c: &dda_contact::Contact) -> bool {
         if (0.0..=1.0).contains(&c.r)
             || !self
