@@ -114,25 +114,14 @@ impl Simulation {
             // type-based detectors has no contact length, and so no bond.
             if bond_touching && c.active && !c.vertex_vertex && j.bonds() && c.d_n <= touch {
                 let c = &mut self.state.contacts.contacts[k];
-                c.state = if j.has_shear() {
-                    ContactState::Locked
-                } else {
-                    ContactState::Sliding
-                };
-                c.locked_r = c.r.clamp(0.0, 1.0);
+                close_where_it_is(c, &j);
                 c.bonded = true;
                 continue;
             }
             // Open contacts are left as they are, but for the settling's touching ones.
             if !c.state.is_closed() {
                 if close_touching && c.active && c.d_n <= open_band {
-                    let c = &mut self.state.contacts.contacts[k];
-                    c.state = if j.has_shear() {
-                        ContactState::Locked
-                    } else {
-                        ContactState::Sliding
-                    };
-                    c.locked_r = c.r.clamp(0.0, 1.0);
+                    close_where_it_is(&mut self.state.contacts.contacts[k], &j);
                 }
                 continue;
             }
@@ -175,4 +164,16 @@ impl Simulation {
         let slack = d_tol / length;
         c.d_n.abs() <= d_tol && (-slack..=1.0 + slack).contains(&c.r)
     }
+}
+
+/// Closes contact `c` of joint `j` where it is: locked, its shear spring anchored at its
+/// vertex's place along the edge (unloaded), or sliding where the joint has no shear
+/// spring.
+fn close_where_it_is(c: &mut dda_contact::Contact, j: &crate::model::JointProps) {
+    c.state = if j.has_shear() {
+        ContactState::Locked
+    } else {
+        ContactState::Sliding
+    };
+    c.locked_r = c.r.clamp(0.0, 1.0);
 }

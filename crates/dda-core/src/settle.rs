@@ -484,24 +484,10 @@ impl Simulation {
             let size = motion.iter().map(|m| m.length()).fold(0.0, f64::max);
             let scale = *first.get_or_insert(size);
             report.scale = scale;
-            let change = if last.is_empty() {
-                f64::INFINITY
-            } else {
-                motion
-                    .iter()
-                    .zip(&last)
-                    .map(|(a, b)| (*a - *b).length())
-                    .fold(0.0, f64::max)
-            };
-            let change2 = if last2.is_empty() {
-                f64::INFINITY
-            } else {
-                motion
-                    .iter()
-                    .zip(&last2)
-                    .map(|(a, b)| (*a - *b).length())
-                    .fold(0.0, f64::max)
-            };
+            let (change, change2) = (
+                largest_change(&motion, &last),
+                largest_change(&motion, &last2),
+            );
             steady_before.clone_from(&report.steady);
             spin_before.clone_from(&report.spin);
             // The translation of the step, block by block (see `rewind`).
@@ -742,4 +728,17 @@ impl Simulation {
             })
             .collect()
     }
+}
+
+/// The largest change of any vertex's motion from `before` to `motion` (infinite when
+/// there is no `before` yet).
+fn largest_change(motion: &[DVec2], before: &[DVec2]) -> f64 {
+    if before.is_empty() {
+        return f64::INFINITY;
+    }
+    motion
+        .iter()
+        .zip(before)
+        .map(|(a, b)| (*a - *b).length())
+        .fold(0.0, f64::max)
 }
