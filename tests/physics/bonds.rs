@@ -3,7 +3,8 @@
 //! until these give way. A block hanging from a roof by its bond alone stays while the
 //! bond's strength exceeds its weight and falls when it is short of it; a cantilever
 //! bonded to a fixed block holds, its joint's corners turning under the moment, and
-//! falls when the joint is weak. With and without the settling.
+//! falls when the joint is weak (with and without the settling); a bonded pair tumbling
+//! in flight stays one body.
 
 // A panic is how a test reports failure.
 #![allow(clippy::unwrap_used)]
@@ -103,4 +104,65 @@ fn a_bonded_cantilever_holds_while_its_joint_is_strong_enough() {
         let fell = largest_drop(&scene(wall, beam, 1e3, settle, 0.5));
         assert!(fell > 0.5, "settle {settle}: dropped {fell} m");
     }
+}
+
+/// Two 1 m x 0.5 m blocks bonded end to end (1e6 Pa), thrown up turning at w = 3 rad/s
+/// as one body (each centroid moving with the pair's rotation), tumble in flight for
+/// 2.5 s, through more than a turn, their bonded corners turning with them: they stay
+/// one body. The bond carries each block's centripetal force m w^2 r = 1,300 x 9 x 0.5
+/// = 5.9 kN (a contact holds 1e6 Pa over 0.25 m, 250 kN), so the blocks' centroids
+/// stay 1 m apart to within 2 F / p (a load applied at once, on one spring) and turn
+/// alike. Unbonded, they part (6.1 m apart after 2 s).
+#[test]
+fn a_bonded_pair_tumbling_in_flight_stays_one_body() {
+    let (w, p) = (3.0, P);
+    let text = format!(
+        r#"
+name = "tumble"
+[analysis]
+duration = 2.5
+time_step = 0.002
+max_displacement = 0.005
+normal_penalty = {p:e}
+gravity = [0.0, -{G}]
+[materials.rock]
+density = {DENSITY}
+young = 1e10
+poisson = 0.25
+[joints.default]
+friction_deg = 35.0
+cohesion = 1e6
+tensile_strength = 1e6
+[[blocks]]
+id = "a"
+material = "rock"
+vertices = [[0.0, 0.0], [1.0, 0.0], [1.0, 0.5], [0.0, 0.5]]
+velocity = [1.0, {va}]
+angular_velocity = {w}
+[[blocks]]
+id = "b"
+material = "rock"
+vertices = [[1.0, 0.0], [2.0, 0.0], [2.0, 0.5], [1.0, 0.5]]
+velocity = [1.0, {vb}]
+angular_velocity = {w}
+"#,
+        va = 5.0 - 0.5 * w,
+        vb = 5.0 + 0.5 * w,
+    );
+    let (_, model) = Scene::parse(&text, Format::Toml, "tumble.toml").unwrap();
+    let mut sim = Simulation::new(model, RunOptions::default());
+    let force = DENSITY * 0.5 * w * w * 0.5;
+    let mut worst = 0.0f64;
+    sim.run(|s, _| {
+        let (a, b) = (
+            s.blocks()[0].polygon.centroid(),
+            s.blocks()[1].polygon.centroid(),
+        );
+        worst = worst.max((a.distance(b) - 1.0).abs());
+    })
+    .unwrap();
+    assert!(worst <= 2.0 * force / p, "parted by {worst} m");
+    let (ra, rb) = (sim.blocks()[0].rotation, sim.blocks()[1].rotation);
+    assert!(ra > 2.0 * std::f64::consts::PI, "turned {ra} rad");
+    assert!((ra - rb).abs() <= 1e-6, "{ra} against {rb}");
 }
