@@ -20,7 +20,7 @@ use super::{Failure, Resolved, bad, build_scene, default_out, resolve_scene, val
 use clap::Args;
 use dda::report::{
     BOLTS_HEADER, Frame, HISTORY_HEADER, MEASUREMENTS_HEADER, bolt_rows, counted, frame_resolution,
-    frame_view, history_row, measurement_rows,
+    frame_view, history_row, measurement_rows, shown,
 };
 use dda_core::{Checkpoint, RunOptions, Scene, SettlingSummary, Simulation, Summary};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -479,11 +479,11 @@ impl Job {
         let p = &sim.model().params;
         let fixed = sim.model().blocks.iter().filter(|b| b.fixed).count();
         eprintln!(
-            "{what} `{}` at t = {} s: {} blocks and {fixed} fixed ({} unknowns), detector {}, \
+            "{what} `{}` at t = {} s: {} and {fixed} fixed ({} unknowns), detector {}, \
              d_tol {} m, d_max {} m",
             sim.model().name,
-            sim.time(),
-            sim.blocks().len() - fixed,
+            shown(sim.time()),
+            counted((sim.blocks().len() - fixed) as u64, "block"),
             sim.unknowns(),
             sim.detector_name(),
             p.d_tol,
@@ -863,7 +863,7 @@ impl Job {
                 "{} s simulated in {} ({}, {}); \
                  {:.3} s wall: detection {:.3} s, assembly {:.3} s, solve {:.3} s; \
                  max penetration {:.3e} m",
-                s.time_simulated,
+                shown(s.time_simulated),
                 counted(s.steps, "step"),
                 counted(s.oci_iterations, "OCI iteration"),
                 counted(s.time_step_cuts, "dt cut"),

@@ -1270,7 +1270,7 @@ fn a_closed_standard_output_is_not_a_panic() {
 }
 
 /// The terminal counts the free blocks and the fixed ones apart: the 20-block column
-/// stands on a fixed base, 21 blocks in all.
+/// stands on a fixed base, 21 blocks in all; the sliding block's scene has one of each.
 #[test]
 fn the_terminal_counts_free_and_fixed_blocks_apart() {
     let dir = scratch("counts");
@@ -1285,6 +1285,33 @@ fn the_terminal_counts_free_and_fixed_blocks_apart() {
     ]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains(": 20 blocks and 1 fixed ("), "{err}");
+    // One free block is one block; a run stopped between steps says its time as a
+    // person reads it (six significant digits), not to the last bit.
+    let one = dda(&[
+        "run",
+        SCENE,
+        "--max-steps",
+        "3",
+        "--out",
+        dir.join("one").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&one.stderr);
+    assert!(err.contains(": 1 block and 1 fixed ("), "{err}");
+    let t = err
+        .split(" s simulated")
+        .next()
+        .unwrap()
+        .rsplit('\n')
+        .next()
+        .unwrap();
+    let digits = t
+        .trim_start_matches(['0', '.'])
+        .chars()
+        .filter(char::is_ascii_digit);
+    assert!(
+        t.parse::<f64>().is_ok() && digits.count() <= 6,
+        "{t:?} in {err}"
+    );
 }
 
 const SLOPE: &str = concat!(

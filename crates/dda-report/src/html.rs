@@ -208,7 +208,7 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
         page,
         r#"<p class="{status_class}" id="status">{}: {} s simulated in {} ({}), detector {}, {:.3} s wall.</p>"#,
         escape(&s.status),
-        s.time_simulated,
+        crate::shown(s.time_simulated),
         counted(s.steps, "step"),
         counted(s.oci_iterations, "OCI iteration"),
         escape(&s.detector),
@@ -220,7 +220,7 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
             r#"<h2 class="failed">Why the run stopped</h2><p class="failed">{}</p>
 <p>Last good state at t = {} s; the last step size tried was {:.3e} s. Blocks involved: {}.</p>"#,
             escape(&f.reason),
-            f.t,
+            crate::shown(f.t),
             f.last_dt,
             if f.blocks.is_empty() {
                 "none singled out".to_string()

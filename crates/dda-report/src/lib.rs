@@ -545,6 +545,17 @@ pub fn counted(n: u64, noun: &str) -> String {
     }
 }
 
+/// `x` to six significant digits, as short as it prints ("0.0197998" for 0.0197997511,
+/// "1" for 1.0): times and sizes in messages for people, where the full precision of a
+/// step's arithmetic is noise. Non-finite values print as they are.
+pub fn shown(x: f64) -> String {
+    if !x.is_finite() || x == 0.0 {
+        return format!("{x}");
+    }
+    let rounded: f64 = format!("{x:.5e}").parse().unwrap_or(x);
+    format!("{rounded}")
+}
+
 /// `s` with the characters HTML and SVG treat specially escaped.
 pub fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
@@ -558,6 +569,16 @@ mod tests {
 
     /// Counts read as English: the noun singular for one, plural otherwise (zero
     /// included).
+    #[test]
+    fn shown_numbers_keep_six_significant_digits() {
+        assert_eq!(shown(0.019_799_751_099_513_645), "0.0197998");
+        assert_eq!(shown(1.0), "1");
+        assert_eq!(shown(0.15), "0.15");
+        assert_eq!(shown(123_456_789.0), "123457000");
+        assert_eq!(shown(-2.5e-7), "-0.00000025");
+        assert_eq!(shown(0.0), "0");
+    }
+
     #[test]
     fn counts_take_the_noun_s_number() {
         assert_eq!(counted(1, "step"), "1 step");
