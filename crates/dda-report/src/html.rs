@@ -315,7 +315,7 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
         ),
         ("detector", s.detector.clone()),
         ("status", s.status.clone()),
-        ("simulated time (s)", s.time_simulated.to_string()),
+        ("simulated time (s)", crate::shown(s.time_simulated)),
         ("steps", s.steps.to_string()),
         ("OCI iterations", s.oci_iterations.to_string()),
         ("time-step cuts", s.time_step_cuts.to_string()),
