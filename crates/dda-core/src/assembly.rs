@@ -6,7 +6,7 @@
 
 use crate::diagnosis::SimError;
 use crate::effects::Effects;
-use crate::kinematics::{Mat6, Vec6, along, elasticity, mass_matrix, own_damping};
+use crate::kinematics::{Mat6, Vec6, along, elasticity, half_turned, mass_matrix, own_damping};
 use crate::scene::{Integration, JointProps, Mode, Model};
 use crate::simulation::Simulation;
 use crate::solver::{BlockSystem, Entry};
@@ -729,9 +729,11 @@ pub(crate) fn block_terms(
         }
     }
     for &(now, place) in &b.fixed_points {
-        // Two rows (x and y) of a spring pulling the point to its place.
+        // Two rows (x and y) of a spring pulling the point to its place, the point's
+        // lever arm half way through the step's turn as its spin predicts it.
+        let at = half_turned(now, m.centroid, b.velocity[2] * dt);
         for dir in [DVec2::X, DVec2::Y] {
-            let r = along(dir, now, m.centroid);
+            let r = along(dir, at, m.centroid);
             let g0 = (now - place).dot(dir);
             for a in 0..6 {
                 f[a] -= p.fixed_penalty * g0 * r[a];

@@ -15,7 +15,7 @@
 //! blocks in the matrix pattern. After a step whose end tension exceeds its strength, it
 //! is broken for good (time and tension recorded).
 
-use crate::kinematics::{Vec6, along, point_displacement};
+use crate::kinematics::{Vec6, along, half_turned, point_displacement};
 use crate::simulation::Simulation;
 use dda_geom::DVec2;
 use serde::{Deserialize, Serialize};
@@ -98,10 +98,27 @@ impl Simulation {
         let length = from.distance(to);
         let n = (to - from) / length;
         let tension = b.pretension + b.stiffness * (length - b.from.distance(b.to));
+        // The bolt's direction and each end's lever arm half way through the step, as the
+        // blocks' velocities predict it (`half_turned`): the bolt's line turns at the
+        // ends' relative speed across it over its length.
+        let dt = self.scratch.attempt_dt;
+        let centroid = |block: usize| self.scratch.shapes[block].centroid;
+        let speed = |block: usize, at: DVec2| {
+            point_displacement(at, centroid(block), &self.state.blocks[block].velocity)
+        };
+        let across = DVec2::new(-n.y, n.x);
+        let line_turn =
+            (speed(b.to_block, to) - speed(b.from_block, from)).dot(across) / length * dt;
+        let n = half_turned(n, DVec2::ZERO, line_turn);
+        let row = |block: usize, at: DVec2| {
+            let c = centroid(block);
+            let turn = self.state.blocks[block].velocity[2] * dt;
+            along(n, half_turned(at, c, turn), c)
+        };
         Some(BoltNow {
             tension,
-            r_from: along(n, from, self.scratch.shapes[b.from_block].centroid),
-            r_to: along(n, to, self.scratch.shapes[b.to_block].centroid),
+            r_from: row(b.from_block, from),
+            r_to: row(b.to_block, to),
         })
     }
 
