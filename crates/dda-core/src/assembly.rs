@@ -723,7 +723,13 @@ pub(crate) fn block_terms(
         f[1] += mat.density * g.y * m.area;
     }
     for &(at, force) in &b.loads {
-        let r = along(force, at, m.centroid);
+        // The load's point half way through the step's turn (`half_turned`): the load
+        // then works along the chord of the point's arc, as the exact turn moves it.
+        let r = along(
+            force,
+            half_turned(at, m.centroid, b.velocity[2] * dt),
+            m.centroid,
+        );
         for a in 0..6 {
             f[a] += r[a];
         }

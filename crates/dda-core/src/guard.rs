@@ -18,10 +18,10 @@
 //! the last good state, or record it and go on.
 
 use crate::diagnosis::SimError;
-use crate::kinematics::{Mat6, Vec6, elasticity, point_displacement};
+use crate::kinematics::{Mat6, Vec6, elasticity};
 use crate::scene::Mode;
 use crate::simulation::Simulation;
-use dda_geom::DVec2;
+use dda_geom::{DVec2, displace_point};
 use serde::{Deserialize, Serialize};
 
 /// Fraction of the reference energy (see the module docs) by which the mechanical
@@ -213,8 +213,9 @@ impl Simulation {
             }
             mechanical += ke + u;
             work += mat.density * area * gravity.dot(DVec2::new(d[0], d[1]));
+            // A load works along its point's path as the step moves it, the turn exact.
             for &(at, force) in &b.loads {
-                work += force.dot(point_displacement(at, s.centroid, d));
+                work += force.dot(displace_point(at, s.centroid, d) - at);
             }
             gains.push((ke - kinetic(mass, &b.velocity), i));
         }

@@ -32,10 +32,11 @@ pub fn along(dir: DVec2, p: DVec2, c: DVec2) -> Vec6 {
 
 /// Where point `p` of a block whose centroid is `c` lies half way through a step that
 /// turns the block by `turn`: the lever arm of a spring held at a point (a fixed point, a
-/// bolt's end). Its linear row then moves the point along the chord of the arc the
-/// exact rotation takes it on, where the lever arm at the step's start moves it along
-/// the tangent: a body turning about a point so held gained energy, (w dt)^2 / 2 of its
-/// own a step (docs/method.md section 4, "Springs held at a point").
+/// bolt's end) or of a point load. Its linear row then moves the point along the chord
+/// of the arc the exact rotation takes it on, where the lever arm at the step's start
+/// moves it along the tangent: a body turning about a point so held, or swung by a
+/// load, gained energy at the second order of its turn a step (docs/method.md section
+/// 4, "Springs held at a point, and point loads").
 pub fn half_turned(p: DVec2, c: DVec2, turn: f64) -> DVec2 {
     let (s, co) = (0.5 * turn).sin_cos();
     let v = p - c;
