@@ -15,9 +15,10 @@ const P: f64 = 1e10;
 const DENSITY: f64 = 2600.0;
 const G: f64 = 9.81;
 
-/// A scene of two blocks on gravity, the first fixed, their joint with `strength` Pa
-/// of cohesion and tensile strength and friction 35 degrees, run for `duration` s.
-fn scene(fixed: &str, free: &str, strength: f64, settle: bool, duration: f64) -> String {
+/// The analysis, material and joint of the scenes below, on gravity: their joint with
+/// `strength` Pa of cohesion and tensile strength and friction 35 degrees, run for
+/// `duration` s.
+fn header(strength: f64, settle: bool, duration: f64) -> String {
     format!(
         r#"
 name = "bond"
@@ -36,6 +37,15 @@ poisson = 0.25
 friction_deg = 35.0
 cohesion = {strength:e}
 tensile_strength = {strength:e}
+"#
+    )
+}
+
+/// A scene of two blocks (`header`), the first fixed.
+fn scene(fixed: &str, free: &str, strength: f64, settle: bool, duration: f64) -> String {
+    let header = header(strength, settle, duration);
+    format!(
+        r#"{header}
 [[blocks]]
 id = "fixed"
 material = "rock"
@@ -116,23 +126,9 @@ fn a_bonded_cantilever_holds_while_its_joint_is_strong_enough() {
 #[test]
 fn a_bonded_pair_tumbling_in_flight_stays_one_body() {
     let (w, p) = (3.0, P);
+    let header = header(1e6, true, 2.5);
     let text = format!(
-        r#"
-name = "tumble"
-[analysis]
-duration = 2.5
-time_step = 0.002
-max_displacement = 0.005
-normal_penalty = {p:e}
-gravity = [0.0, -{G}]
-[materials.rock]
-density = {DENSITY}
-young = 1e10
-poisson = 0.25
-[joints.default]
-friction_deg = 35.0
-cohesion = 1e6
-tensile_strength = 1e6
+        r#"{header}
 [[blocks]]
 id = "a"
 material = "rock"

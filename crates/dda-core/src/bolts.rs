@@ -103,12 +103,12 @@ impl Simulation {
         // ends' relative speed across it over its length.
         let dt = self.scratch.attempt_dt;
         let centroid = |block: usize| self.scratch.shapes[block].centroid;
-        let speed = |block: usize, at: DVec2| {
+        let velocity = |block: usize, at: DVec2| {
             point_displacement(at, centroid(block), &self.state.blocks[block].velocity)
         };
         let across = DVec2::new(-n.y, n.x);
         let line_turn =
-            (speed(b.to_block, to) - speed(b.from_block, from)).dot(across) / length * dt;
+            (velocity(b.to_block, to) - velocity(b.from_block, from)).dot(across) / length * dt;
         let n = half_turned(n, DVec2::ZERO, line_turn);
         let row = |block: usize, at: DVec2| {
             let c = centroid(block);

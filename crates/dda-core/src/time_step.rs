@@ -124,17 +124,12 @@ impl Simulation {
             let Some((_, speed)) = self.impact_speed(pc.pair) else {
                 continue;
             };
-            let mass = |i: usize| {
-                self.free[i].map(|_| {
-                    blocks[i]
-                        .body
-                        .map_or_else(|| self.block_mass(i), |body| body_mass[body as usize])
-                })
-            };
-            let m = match (mass(pc.pair.a as usize), mass(pc.pair.b as usize)) {
-                (Some(ma), Some(mb)) => ma * mb / (ma + mb),
-                (Some(m), None) | (None, Some(m)) => m,
-                (None, None) => continue,
+            let Some(m) = self.reduced_mass(pc.pair, |i| {
+                blocks[i]
+                    .body
+                    .map_or_else(|| self.block_mass(i), |body| body_mass[body as usize])
+            }) else {
+                continue;
             };
             let in_impact = self.state.contacts.contacts[pc.start as usize..pc.end as usize]
                 .iter()
@@ -157,13 +152,23 @@ impl Simulation {
     pub(crate) fn impact_speed(&self, pair: dda_contact::NeighbourPair) -> Option<(f64, f64)> {
         let p = &self.model.params;
         let g = p.gravity.map_or(0.0, |g| g.length());
-        let mass = |i: usize| self.free[i].map(|_| self.block_mass(i));
-        let m = match (mass(pair.a as usize), mass(pair.b as usize)) {
-            (Some(ma), Some(mb)) => ma * mb / (ma + mb),
-            (Some(m), None) | (None, Some(m)) => m,
-            (None, None) => return None,
-        };
+        let m = self.reduced_mass(pair, |i| self.block_mass(i))?;
         Some((m, 2.0 * g * (m / p.normal_penalty).sqrt()))
+    }
+
+    /// The reduced mass of `pair`'s blocks, each of mass `mass` (the free block's
+    /// against a fixed one); None if neither block is free.
+    fn reduced_mass(
+        &self,
+        pair: dda_contact::NeighbourPair,
+        mass: impl Fn(usize) -> f64,
+    ) -> Option<f64> {
+        let of = |i: u32| self.free[i as usize].map(|_| mass(i as usize));
+        match (of(pair.a), of(pair.b)) {
+            (Some(ma), Some(mb)) => Some(ma * mb / (ma + mb)),
+            (Some(m), None) | (None, Some(m)) => Some(m),
+            (None, None) => None,
+        }
     }
 
     /// Whether contact `c` is in impact at the step's start: active, and its vertex

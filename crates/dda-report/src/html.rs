@@ -3,7 +3,7 @@
 //! contacts marked), time histories, the summary with any failure diagnosis, and the
 //! effects and parameters used.
 
-use super::{Frame, counted, escape, plot};
+use super::{Frame, counted, escape, plot, shown};
 use dda_core::{Model, Scene, Summary};
 use dda_geom::Aabb;
 use std::fmt::Write as _;
@@ -208,7 +208,7 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
         page,
         r#"<p class="{status_class}" id="status">{}: {} s simulated in {} ({}), detector {}, {:.3} s wall.</p>"#,
         escape(&s.status),
-        crate::shown(s.time_simulated),
+        shown(s.time_simulated),
         counted(s.steps, "step"),
         counted(s.oci_iterations, "OCI iteration"),
         escape(&s.detector),
@@ -220,7 +220,7 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
             r#"<h2 class="failed">Why the run stopped</h2><p class="failed">{}</p>
 <p>Last good state at t = {} s; the last step size tried was {:.3e} s. Blocks involved: {}.</p>"#,
             escape(&f.reason),
-            crate::shown(f.t),
+            shown(f.t),
             f.last_dt,
             if f.blocks.is_empty() {
                 "none singled out".to_string()
@@ -315,7 +315,7 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
         ),
         ("detector", s.detector.clone()),
         ("status", s.status.clone()),
-        ("simulated time (s)", crate::shown(s.time_simulated)),
+        ("simulated time (s)", shown(s.time_simulated)),
         ("steps", s.steps.to_string()),
         ("OCI iterations", s.oci_iterations.to_string()),
         ("time-step cuts", s.time_step_cuts.to_string()),

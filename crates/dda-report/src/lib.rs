@@ -566,9 +566,10 @@ pub fn escape(s: &str) -> String {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
 
-    /// Counts read as English: the noun singular for one, plural otherwise (zero
-    /// included).
+    /// Six significant digits, as short as they print: trailing zeros and exponents
+    /// left out, zero as it is.
     #[test]
     fn shown_numbers_keep_six_significant_digits() {
         assert_eq!(shown(0.019_799_751_099_513_645), "0.0197998");
@@ -579,13 +580,14 @@ mod tests {
         assert_eq!(shown(0.0), "0");
     }
 
+    /// Counts read as English: the noun singular for one, plural otherwise (zero
+    /// included).
     #[test]
     fn counts_take_the_noun_s_number() {
         assert_eq!(counted(1, "step"), "1 step");
         assert_eq!(counted(0, "dt cut"), "0 dt cuts");
         assert_eq!(counted(8, "OCI iteration"), "8 OCI iterations");
     }
-    use super::*;
 
     /// Four significant digits of every finite number are finite, the normal ones within
     /// half a unit of the fourth digit (5e-4 of themselves), the subnormal ones (which
