@@ -694,15 +694,19 @@ impl Job {
                         static_steps: done.steps,
                         converged: done.converged,
                         seconds,
+                        kept_step: done.kept_step,
                     });
                     if !self.quiet {
                         let line = format!(
                             "settled in {}{}, solved {} ({seconds:.3} s)",
                             counted(done.steps as u64, "static step"),
-                            if done.converged {
-                                ""
-                            } else {
-                                ", stopped without converging"
+                            match (done.converged, done.kept_step) {
+                                (true, _) => String::new(),
+                                (false, Some(k)) => format!(
+                                    ", stopped without converging (the run starts from \
+                                     its steadiest, step {k})"
+                                ),
+                                (false, None) => ", stopped without converging".to_string(),
                             },
                             done.solver.adverb(),
                         );

@@ -380,6 +380,86 @@ fn settled_stacks_start_where_the_scene_put_them() {
     }
 }
 
+/// A mechanism starts the run where the scene put it. A column 0.5 m x 3 m standing on
+/// level rock under gravity tilted 20 degrees (b / h = 0.17 < tan 20 degrees: it
+/// topples; friction 40 degrees: it does not slide), and a wheel of 32 sides, 0.5 m in
+/// radius, on the same ground (it rolls), move under their weight in every static step
+/// of the settling: their motion changes with their geometry and never repeats to the
+/// settling's tolerance, so the settling stops without converging. It ends at its
+/// steadiest step, its contacts loaded: no vertex starts the run further from where the
+/// scene put it than one step of the run may move it (d_max, 1 mm here; the springs'
+/// deflection under the weight is some 1e-5 m). Kept at its last static step (until
+/// 2026-11-27), the column's top started 11 mm and the wheel 6.8 mm away, with no
+/// velocity: the settling had moved the mechanisms on (0.17 mm and 0.05 mm now).
+#[test]
+fn a_mechanism_starts_where_the_scene_put_it() {
+    let d_max = 1e-3;
+    let (gx, gy) = {
+        let (s, c) = f64::to_radians(20.0).sin_cos();
+        (9.81 * s, -9.81 * c)
+    };
+    let column = "[[0.0, 0.5], [0.5, 0.5], [0.5, 3.5], [0.0, 3.5]]".to_string();
+    let (r, n) = (0.5, 32);
+    let half = std::f64::consts::PI / f64::from(n);
+    let wheel: Vec<String> = (0..n)
+        .map(|k| {
+            let a = -std::f64::consts::FRAC_PI_2 - half + 2.0 * half * f64::from(k);
+            format!("[{}, {}]", r * a.cos(), 0.5 + r * half.cos() + r * a.sin())
+        })
+        .collect();
+    for (name, outline) in [
+        ("column", column),
+        ("wheel", format!("[{}]", wheel.join(", "))),
+    ] {
+        let text = format!(
+            r#"
+name = "{name}"
+[analysis]
+duration = 1.0
+time_step = 0.001
+max_displacement = {d_max}
+normal_penalty = 1e10
+gravity = [{gx}, {gy}]
+[materials.rock]
+density = 2600.0
+young = 1e10
+poisson = 0.25
+[joints.default]
+friction_deg = 40.0
+[[blocks]]
+id = "ground"
+material = "rock"
+fixed = true
+vertices = [[-5.0, 0.0], [30.0, 0.0], [30.0, 0.5], [-5.0, 0.5]]
+[[blocks]]
+id = "{name}"
+material = "rock"
+vertices = {outline}
+"#
+        );
+        let (_, model) = Scene::parse(&text, Format::Toml, "mechanism.toml").unwrap();
+        let start = model.blocks[1].polygon.vertices().to_vec();
+        let mut sim = Simulation::new(model, RunOptions::default());
+        assert!(sim.settle_watched(|_| true).unwrap());
+        let settled = sim.settling().unwrap();
+        assert!(
+            !settled.converged && settled.kept_step.is_some(),
+            "{name}: {settled:?}"
+        );
+        let moved = sim.blocks()[1]
+            .polygon
+            .vertices()
+            .iter()
+            .zip(&start)
+            .map(|(a, b)| a.distance(*b))
+            .fold(0.0, f64::max);
+        assert!(
+            moved < d_max,
+            "{name}: a vertex starts {moved} m from the scene's"
+        );
+    }
+}
+
 /// A wall under `impact_steps`: 4 courses of five 1 m x 0.5 m bricks (E = 1e9 Pa,
 /// p = 1e10 N/m) on 40/30 with `impact_steps = 10`, whose default rule takes the
 /// average-acceleration rule only in the steps an impact holds down, slides as one body

@@ -155,6 +155,9 @@ struct Relaxed {
     change: f64,
     /// Whether the watcher stopped the round.
     interrupted: bool,
+    /// For a round that did not converge, the step (of the settling, counted from its
+    /// first) whose state it ended in: the steadiest one, where the motion changed least.
+    kept: Option<u32>,
 }
 
 /// How far the settling has come ([`Simulation::settle_watched`]), after a static step.
@@ -181,6 +184,10 @@ pub struct Settling {
     /// How its static steps were solved, `Direct` or `Iterative`
     /// ([`crate::iterative::settling_solver`]).
     pub solver: SolverChoice,
+    /// For a settling that did not converge, the static step whose state the run starts
+    /// from: the steadiest one, where the motion changed least from the step before
+    /// (docs/method.md section 13).
+    pub kept_step: Option<u32>,
 }
 
 impl Simulation {
@@ -369,6 +376,7 @@ impl Simulation {
         let mut report = Settling {
             steps: round.steps,
             converged: round.converged,
+            kept_step: round.kept,
             solver: if settling.solves_iteratively() {
                 SolverChoice::Iterative
             } else {
@@ -466,7 +474,11 @@ impl Simulation {
             last: Vec::new(),
             change: f64::INFINITY,
             interrupted: false,
+            kept: None,
         };
+        // The state at the steadiest step so far, `best_at`, where a round that does not
+        // converge ends (below).
+        let mut steadiest = None;
         for n in 1..=budget {
             if self.finished() {
                 break;
@@ -530,10 +542,24 @@ impl Simulation {
             }
             if change <= 0.5 * best {
                 (best, best_at) = (change, n);
+                steadiest = Some(self.state.clone());
             } else if n - best_at >= SETTLE_STALL {
                 break;
             }
             last2 = std::mem::replace(&mut last, motion);
+        }
+        // A round that does not converge ends at its steadiest step: the steps after it
+        // moved a mechanism on (a column toppling, a wheel rolling, a pendulum swinging
+        // moves by a static step's motion a step, and changes its geometry as it goes:
+        // its motion never repeats to the tolerance), or flickered, and loaded the
+        // contacts no better (docs/method.md section 13).
+        if !report.converged
+            && !report.interrupted
+            && best_at < report.steps
+            && let Some(state) = steadiest
+        {
+            self.state = state;
+            report.kept = Some(done + best_at);
         }
         Ok(report)
     }

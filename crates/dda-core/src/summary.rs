@@ -124,6 +124,10 @@ pub struct SettlingSummary {
     /// Absent in the record of a run begun before it was kept.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub solver: Option<SolverChoice>,
+    /// For a settling that did not converge, the static step the run starts from: the
+    /// steadiest, where the motion changed least (docs/method.md section 13).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kept_step: Option<u32>,
 }
 
 /// A bolt at the end of a run.
