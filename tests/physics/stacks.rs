@@ -389,8 +389,8 @@ fn settled_stacks_start_where_the_scene_put_them() {
 /// steadiest step, its contacts loaded: no vertex starts the run further from where the
 /// scene put it than one step of the run may move it (d_max, 1 mm here; the springs'
 /// deflection under the weight is some 1e-5 m). Kept at its last static step (until
-/// 2026-11-27), the column's top started 11 mm and the wheel 6.8 mm away, with no
-/// velocity: the settling had moved the mechanisms on (0.17 mm and 0.05 mm now).
+/// 2026-11-27), the column started 10.8 mm and the wheel 6.8 mm away, with no
+/// velocity: the settling had moved the mechanisms on (0.13 mm and 0.05 mm now).
 #[test]
 fn a_mechanism_starts_where_the_scene_put_it() {
     let d_max = 1e-3;

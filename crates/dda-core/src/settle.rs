@@ -63,6 +63,7 @@ use crate::model::supported_blocks;
 use crate::scene::{Integration, Mode, Model, SolverChoice};
 use crate::simulation::{RunOptions, Simulation};
 use crate::solver::SolveError;
+use crate::state::RunState;
 use dda_contact::BlockShape;
 use dda_geom::{DVec2, Groups, displace_point};
 
@@ -476,9 +477,9 @@ impl Simulation {
             interrupted: false,
             kept: None,
         };
-        // The state at the steadiest step so far, `best_at`, where a round that does not
-        // converge ends (below).
-        let mut steadiest = None;
+        // The steadiest step so far (the least change), its change and its state, where
+        // a round that does not converge ends (below).
+        let mut steadiest: Option<(u32, f64, RunState)> = None;
         for n in 1..=budget {
             if self.finished() {
                 break;
@@ -540,9 +541,14 @@ impl Simulation {
                 report.converged = true;
                 break;
             }
+            if steadiest
+                .as_ref()
+                .is_none_or(|(_, least, _)| change < *least)
+            {
+                steadiest = Some((n, change, self.state.clone()));
+            }
             if change <= 0.5 * best {
                 (best, best_at) = (change, n);
-                steadiest = Some(self.state.clone());
             } else if n - best_at >= SETTLE_STALL {
                 break;
             }
@@ -555,11 +561,11 @@ impl Simulation {
         // contacts no better (docs/method.md section 13).
         if !report.converged
             && !report.interrupted
-            && best_at < report.steps
-            && let Some(state) = steadiest
+            && let Some((at, _, state)) = steadiest
+            && at < report.steps
         {
             self.state = state;
-            report.kept = Some(done + best_at);
+            report.kept = Some(done + at);
         }
         Ok(report)
     }
