@@ -715,6 +715,14 @@ impl Job {
                             None => eprintln!("{line}"),
                         }
                     }
+                } else if !self.quiet {
+                    // Settled with nothing to settle: no free block rests on a fixed one.
+                    let line = "settling: nothing to settle (no free block rests, directly or \
+                                through others, on a fixed block); the run starts as written";
+                    match bar {
+                        Some(bar) => bar.println(line),
+                        None => eprintln!("{line}"),
+                    }
                 }
                 End::Done
             }

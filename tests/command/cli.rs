@@ -935,6 +935,39 @@ fn settling_wall(courses: usize) -> String {
     t
 }
 
+/// A scene whose free blocks all start in flight has nothing to settle (they are held
+/// where they are while the others settle, and here there are no others): the run says
+/// so after announcing the settling, rather than falling silent, and starts as written.
+#[test]
+fn a_run_with_nothing_resting_says_it_had_nothing_to_settle() {
+    let dir = scratch("nothing-to-settle");
+    let scene = dir.join("drop.toml");
+    std::fs::write(
+        &scene,
+        "name = \"drop\"\n[analysis]\nduration = 0.01\ntime_step = 0.001\n\
+         max_displacement = 0.002\nnormal_penalty = 1e10\ngravity = [0.0, -9.81]\n\
+         [materials.rock]\ndensity = 2600.0\nyoung = 1e9\npoisson = 0.25\n\
+         [[blocks]]\nid = \"floor\"\nmaterial = \"rock\"\nfixed = true\n\
+         vertices = [[0.0, -1.0], [4.0, -1.0], [4.0, 0.0], [0.0, 0.0]]\n\
+         [[blocks]]\nid = \"stone\"\nmaterial = \"rock\"\n\
+         vertices = [[1.0, 1.0], [2.0, 1.0], [2.0, 2.0], [1.0, 2.0]]\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = dda(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let said = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{said}");
+    assert!(said.contains("settling: static steps"), "{said}");
+    assert!(said.contains("nothing to settle"), "{said}");
+    assert!(!said.contains("settled in"), "{said}");
+    assert!(summary(&out).get("settling").is_none());
+}
+
 /// A signal while the blocks settle (before t = 0) ends the settling at its next static
 /// step: exit 130, a checkpoint holding the blocks as the scene gave them (no step
 /// taken, not settled), a line naming `dda resume`; resumed, the run settles again and
