@@ -29,6 +29,60 @@ fn moves(phi: f64) -> Vec<(String, DVec2)> {
         .collect()
 }
 
+/// A region's in-situ stress (`regions[].stress`, `stress_gradient`): the jointed mass of
+/// `tests/scenes/in-situ.toml`, laterally confined, given a lithostatic stress with K = 1,
+/// keeps it through a static analysis under gravity: every block's sx and sy within 1%
+/// of -rho g (5 - y) at its centroid. The joints' penalty springs (p = 1e13 N/m, two to
+/// a 1 m face) give under the load, relieving a block's stress by about E' / p per
+/// metre, 1e-3 of it; 1e-2 bounds that. Without the keys the blocks start unstressed
+/// and the slot holds them at K = nu / (1 - nu) = 1/3 (within 1e-2 of sy likewise):
+/// the keys are what keeps sx. A gradient that would take a block beyond the stress a
+/// block may have is refused, naming the key.
+#[test]
+fn a_region_keeps_the_in_situ_stress_it_is_given() {
+    const SCENE: &str = include_str!("../scenes/in-situ.toml");
+    let unstressed: String = SCENE
+        .lines()
+        .filter(|l| !l.starts_with("stress"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    for (text, k) in [(SCENE.to_string(), 1.0), (unstressed, 1.0 / 3.0)] {
+        let (_, model) = Scene::parse(&text, Format::Toml, "in-situ.toml").unwrap();
+        let ids: Vec<String> = model.blocks.iter().map(|b| b.id.clone()).collect();
+        let mut sim = Simulation::new(model, RunOptions::default());
+        sim.run(|_, _| {}).unwrap();
+        let mut checked = 0;
+        for (id, b) in ids.iter().zip(sim.blocks()) {
+            if !id.starts_with("mass.") {
+                continue;
+            }
+            let y = b.polygon.centroid().y;
+            let lithostatic = -2600.0 * 9.81 * (5.0 - y);
+            let [sx, sy, _] = b.stress;
+            assert!((sy / lithostatic - 1.0).abs() < 1e-2, "{id}: sy {sy}");
+            assert!(
+                (sx / sy - k).abs() < 1e-2,
+                "{id}: sx / sy {}, K {k}",
+                sx / sy
+            );
+            checked += 1;
+        }
+        assert_eq!(checked, 10);
+    }
+    // Out of its own range (1e9 Pa/m), and taking the top blocks (y = 4.5 m) beyond 1e11 Pa.
+    let steep = SCENE.replace("25506.0, 25506.0", "25506.0, 2e9");
+    let beyond = SCENE
+        .replace("-127530.0, -127530.0", "-127530.0, 9.9e10")
+        .replace("25506.0, 25506.0", "25506.0, 1e9");
+    for text in [steep, beyond] {
+        let e = Scene::parse(&text, Format::Toml, "in-situ.toml").unwrap_err();
+        assert!(
+            e.to_string().contains("regions[0].stress_gradient[1]"),
+            "{e}"
+        );
+    }
+}
+
 /// Friction 40 degrees, above the bedding's 30: no block moves by 5 mm in 0.5 s (the
 /// flush-joint issue's standard for standing). Friction 20 degrees: the layer at the
 /// face slides down the bedding, out of the face, at least half as far as a block on a

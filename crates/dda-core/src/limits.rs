@@ -137,6 +137,13 @@ pub const STRESS: Range = Range {
     max: 1e11,
     unit: "Pa",
 };
+/// Each component of a region's `stress_gradient`: some 30 times the weight of the
+/// densest rock the scene admits (1e5 kg/m^3 at 1e4 m/s^2 would be 1e9).
+pub const STRESS_GRADIENT: Range = Range {
+    min: -1e9,
+    max: 1e9,
+    unit: "Pa/m",
+};
 /// Each component of a point load's `force`.
 pub const FORCE: Range = Range {
     min: -1e13,

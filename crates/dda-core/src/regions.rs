@@ -9,7 +9,7 @@
 
 use crate::limits;
 use crate::model::start_overlap;
-use crate::scene::{BlockSpec, ExcavationSpec, Invalid, JointSetSpec, Scene, invalid};
+use crate::scene::{BlockSpec, ExcavationSpec, Invalid, JointSetSpec, RegionSpec, Scene, invalid};
 use dda_geom::{
     Aabb, ConvexPolygon, DVec2, Joint, JointFamily, JointSet, JointSetError, Line, Outline,
     PolygonError, cut_mass, separation,
@@ -319,6 +319,7 @@ pub fn expand(scene: &Scene) -> Result<(Scene, Dropped), Invalid> {
         if cut.dropped > 0 {
             dropped.slivers.push((i, cut.dropped, cut.dropped_area));
         }
+        let in_situ = in_situ_stress(&key, r)?;
         for (k, piece) in cut.pieces.iter().enumerate() {
             let id = format!("{}.{}", r.id, k + 1);
             let glued = piece.parts.len() > 1;
@@ -348,6 +349,7 @@ pub fn expand(scene: &Scene) -> Result<(Scene, Dropped), Invalid> {
                     // Seams: intact rock between parts, never a trace (the faces of a
                     // joint that ends inside the piece are a joint, not a seam).
                     glued_edges: glued.then(|| seams(&piece.parts, m, |k| sets[k].is_none())),
+                    stress: in_situ(part.centroid().y)?,
                     ..Default::default()
                 });
             }
@@ -373,6 +375,55 @@ pub fn expand(scene: &Scene) -> Result<(Scene, Dropped), Invalid> {
         ));
     }
     Ok((out, dropped))
+}
+
+/// The initial stress of region `r`'s blocks (`key` its entry) as a function of a
+/// block's centroid height y: `stress` + `stress_gradient` y, None where the region
+/// gives neither. Errors name the key of a component out of its range, or the gradient
+/// where it takes a block's stress out of the range a block's may have.
+fn in_situ_stress(
+    key: &str,
+    r: &RegionSpec,
+) -> Result<impl Fn(f64) -> Result<Option<[f64; 3]>, Invalid>, Invalid> {
+    let check = |name: &str, v: &Option<[f64; 3]>, range: &limits::Range| {
+        for (i, &x) in v.iter().flatten().enumerate() {
+            if !range.contains(x) {
+                return Err(invalid(format!("{key}.{name}[{i}]"), range.message(x)));
+            }
+        }
+        Ok(())
+    };
+    check("stress", &r.stress, &limits::STRESS)?;
+    check(
+        "stress_gradient",
+        &r.stress_gradient,
+        &limits::STRESS_GRADIENT,
+    )?;
+    let (at_zero, gradient) = (r.stress, r.stress_gradient);
+    let key = key.to_string();
+    Ok(move |y: f64| {
+        if at_zero.is_none() && gradient.is_none() {
+            return Ok(None);
+        }
+        let (s0, g) = (at_zero.unwrap_or_default(), gradient.unwrap_or_default());
+        let mut s = [0.0; 3];
+        for i in 0..3 {
+            s[i] = s0[i] + g[i] * y;
+            if !limits::STRESS.contains(s[i]) {
+                return Err(invalid(
+                    format!("{key}.stress_gradient[{i}]"),
+                    format!(
+                        "gives a block at y = {y} m a stress of {:e} Pa, beyond the {:e} \
+                         to {:e} Pa a block's stress may have",
+                        s[i],
+                        limits::STRESS.min,
+                        limits::STRESS.max
+                    ),
+                ));
+            }
+        }
+        Ok(Some(s))
+    })
 }
 
 /// Cuts every block of `scene` that excavation `x` crosses along its outline, and marks

@@ -174,6 +174,21 @@ pub struct RegionSpec {
     /// region's area: slivers of rounding).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub min_area: Option<f64>,
+    /// Initial stress (sx, sy, txy) of its blocks at y = 0, Pa (tension positive); with
+    /// `stress_gradient`, a block's is taken at its centroid (the in-situ stress).
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "exact::option"
+    )]
+    pub stress: Option<[f64; 3]>,
+    /// Change of the initial stress per metre of height y, Pa/m (each component).
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "exact::option"
+    )]
+    pub stress_gradient: Option<[f64; 3]>,
 }
 
 /// Dynamic (inertia carried from step to step) or static (velocities zeroed each step).

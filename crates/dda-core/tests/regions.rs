@@ -240,6 +240,8 @@ proptest! {
             joint_sets: names,
             fixed: false,
             min_area: Some(0.0),
+            stress: None,
+            stress_gradient: None,
         });
         let explicit = scene.expanded().unwrap();
         let blocks: Vec<ConvexPolygon> = explicit
