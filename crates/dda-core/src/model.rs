@@ -25,7 +25,9 @@ impl Scene {
     /// records), so that the cutting is done once.
     pub fn build(&self) -> Result<(Cow<'_, Scene>, Model), Invalid> {
         if self.regions.is_empty() && self.joint_sets.is_empty() && self.excavations.is_empty() {
-            return Ok((Cow::Borrowed(self), self.validate_blocks()?));
+            let mut model = self.validate_blocks()?;
+            model.warnings.extend(self.stress_of_rigid_blocks(&model));
+            return Ok((Cow::Borrowed(self), model));
         }
         let (scene, dropped) = crate::regions::expand(self)?;
         let mut model = scene.validate_blocks()?;
@@ -35,7 +37,46 @@ impl Scene {
                 format!("{n} pieces below min_area dropped ({area:.3e} m^2 in all)"),
             ));
         }
+        model.warnings.extend(self.stress_of_rigid_blocks(&model));
         Ok((Cow::Owned(scene), model))
+    }
+
+    /// A warning where a rigid analysis is given an initial stress, which its blocks
+    /// cannot carry (they have no strain): the first block's or region's key that gives
+    /// one, with how many more do.
+    fn stress_of_rigid_blocks(&self, model: &Model) -> Option<Invalid> {
+        if model.params.deformable {
+            return None;
+        }
+        let stressed = |s: &Option<[f64; 3]>| s.is_some_and(|s| s.iter().any(|&x| x != 0.0));
+        let keys: Vec<String> = self
+            .blocks
+            .iter()
+            .enumerate()
+            .filter(|(_, b)| stressed(&b.stress))
+            .map(|(i, _)| format!("blocks[{i}].stress"))
+            .chain(self.regions.iter().enumerate().filter_map(|(i, r)| {
+                if stressed(&r.stress) {
+                    Some(format!("regions[{i}].stress"))
+                } else if stressed(&r.stress_gradient) {
+                    Some(format!("regions[{i}].stress_gradient"))
+                } else {
+                    None
+                }
+            }))
+            .collect();
+        let first = keys.first()?;
+        let more = match keys.len() - 1 {
+            0 => String::new(),
+            n => format!(" (and {n} more)"),
+        };
+        Some(invalid(
+            first.clone(),
+            format!(
+                "a rigid analysis (analysis.deformable = false) ignores initial stress{more}: \
+                 rigid blocks have no strain to carry it"
+            ),
+        ))
     }
 
     /// The scene with its regions cut into blocks: what `dda build` writes.

@@ -285,6 +285,26 @@ fn small_contact_tolerance_warns() {
     assert!(model.warnings.is_empty());
 }
 
+/// A rigid analysis given an initial stress is warned that it ignores it (its blocks have
+/// no strain), naming the first key that gives one; a deformable one is not.
+#[test]
+fn initial_stress_in_a_rigid_analysis_is_warned_of() {
+    let stressed = GOOD.replace(
+        "fixed = true",
+        "fixed = true\n[[blocks]]\nid = \"slab\"\nmaterial = \"rock\"\n\
+         vertices = [[2.0, 1.0], [3.0, 1.0], [3.0, 2.0], [2.0, 2.0]]\n\
+         stress = [-1e5, -2e5, 0.0]",
+    );
+    let (_, model) = Scene::parse(&stressed, Format::Toml, "s.toml").expect("valid");
+    assert!(model.warnings.is_empty(), "{:?}", model.warnings);
+    let rigid = stressed.replace("deformable = true", "deformable = false");
+    let (_, model) = Scene::parse(&rigid, Format::Toml, "s.toml").expect("valid");
+    assert_eq!(model.warnings.len(), 1, "{:?}", model.warnings);
+    let w = &model.warnings[0];
+    assert_eq!(w.key, "blocks[1].stress", "{w:?}");
+    assert!(w.message.contains("rigid"), "{w:?}");
+}
+
 const SLIDER_LINE: &str = "vertices = [[0.0, 1.0], [1.0, 1.0], [1.0, 2.0], [0.0, 2.0]]";
 
 #[test]
