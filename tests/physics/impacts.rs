@@ -345,3 +345,64 @@ vertices = [[0.999, 0.5], [1.0, 0.5], [1.0, 1.5], [0.999, 1.5]]
     let restitution = up / (2.0 * 9.81 * 0.5f64).sqrt();
     assert!(restitution >= 0.95, "{restitution}");
 }
+
+/// A chip 3 cm square thrown up spinning at 300 rad/s flies free for 0.5 s and lands on
+/// a fixed floor. In flight nothing holds it (no contact within d_tol, no fixed point,
+/// load or bolt), so the rotation limit theta_max (2 degrees) does not hold its steps:
+/// they are those d_max allows its vertices (10 mm at some 11 m/s), where theta_max
+/// would ask for 300 x 0.5 / 0.0349 = 4,297 steps in flight. Its flight is exact at any
+/// turn a step (the update turns a block exactly; nothing acts on it but gravity): its
+/// rotation is w t and its centroid at x0 + v t + g t^2 / 2 to 1e-9 at 0.5 s. It then
+/// lands under the guard, the limit holding it again once it has a contact.
+#[test]
+fn a_chip_spinning_in_flight_is_not_held_to_the_rotation_limit() {
+    let (w, vx, vy, g) = (300.0, 2.0, 5.0, 9.81);
+    let text = |duration: f64| {
+        format!(
+            r#"
+name = "chip"
+[analysis]
+duration = {duration}
+time_step = 0.001
+max_displacement = 0.01
+normal_penalty = 1e9
+gravity = [0.0, -{g}]
+[materials.rock]
+density = 2600.0
+young = 1e10
+poisson = 0.25
+[[blocks]]
+id = "floor"
+material = "rock"
+fixed = true
+vertices = [[-1.0, -3.0], [5.0, -3.0], [5.0, -2.0], [-1.0, -2.0]]
+[[blocks]]
+id = "chip"
+material = "rock"
+vertices = [[-0.015, -0.015], [0.015, -0.015], [0.015, 0.015], [-0.015, 0.015]]
+velocity = [{vx}, {vy}]
+angular_velocity = {w}
+"#
+        )
+    };
+    let (t, parse) = (0.5, |s: &str| {
+        Scene::parse(s, Format::Toml, "chip.toml").unwrap().1
+    });
+    let mut sim = guarded(parse(&text(t)));
+    sim.run(|_, _| {}).unwrap();
+    let steps = sim.totals().steps;
+    assert!(steps < 1000, "{steps} steps in flight");
+    let chip = &sim.blocks()[1];
+    let c = chip.polygon.centroid();
+    assert!(
+        (chip.rotation - w * t).abs() <= 1e-9 * w * t,
+        "{}",
+        chip.rotation
+    );
+    assert!((c.x - vx * t).abs() <= 1e-9, "{c}");
+    assert!((c.y - (vy * t - 0.5 * g * t * t)).abs() <= 1e-9, "{c}");
+    // It reaches the floor (2 m below its start) at about 1.4 s, and lies on it at 2 s.
+    let mut sim = guarded(parse(&text(2.0)));
+    sim.run(|_, _| {}).unwrap();
+    assert!(sim.blocks()[1].polygon.centroid().y < -1.9);
+}

@@ -89,6 +89,10 @@ pub(crate) struct Scratch {
     /// Whether an impact holds the step down (`Simulation::impact_room`), set at the
     /// step's start: the step's rule under `Integration::AverageInImpacts`.
     pub(crate) in_impact: bool,
+    /// Which blocks the rotation limit theta_max holds in this step
+    /// (`Simulation::mark_turn_limited`): those with a contact, a fixed point, a load or
+    /// a bolt.
+    pub(crate) turn_limited: Vec<bool>,
     /// Each active contact's normal row for the attempt (an inactive one's is a NaN
     /// placeholder until it becomes active: only active contacts' rows are read).
     pub(crate) rows: Vec<Row>,
@@ -341,6 +345,7 @@ impl Simulation {
                 pair_entry: Vec::new(),
                 half: Vec::with_capacity(n),
                 in_impact: false,
+                turn_limited: Vec::new(),
                 rows: Vec::new(),
                 springs: Vec::new(),
                 sheared: ShearRows::default(),
@@ -574,6 +579,7 @@ impl Simulation {
         // carry a vertex beyond d_max, or turn it beyond theta_max, within it.
         let impact = self.impact_room();
         self.scratch.in_impact = impact.is_finite();
+        self.mark_turn_limited();
         let planned = self.state.dt.min(self.velocity_room()).min(impact);
         // Land on `duration`; a remainder within 1e-6 of a step is taken with it rather
         // than left as a sliver step.

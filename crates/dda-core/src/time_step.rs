@@ -64,10 +64,37 @@ pub(crate) fn motion_room(disp: f64, rot: f64, d_max: f64, theta_max: f64) -> f6
 pub(crate) const DT_FLOOR: f64 = 1e-9;
 
 impl Simulation {
+    /// Marks the blocks the rotation limit theta_max holds in this step
+    /// (`Scratch::turn_limited`), after the step's detection: every block with a
+    /// contact (a candidate within d_tol), a fixed point, a load or a bolt. The others turn free in flight, and the limit is of no use to them: their
+    /// rotation is exact in the update, no spring's row rests on its lever arm, and
+    /// d_max still bounds how far their vertices move, so that no contact is missed
+    /// (docs/method.md section 7). A chip of 3 cm spinning in flight at 60 turns a
+    /// second held a rubble pile's every step to 9e-5 s.
+    pub(crate) fn mark_turn_limited(&mut self) {
+        let limited = &mut self.scratch.turn_limited;
+        limited.clear();
+        limited.extend(
+            self.state
+                .blocks
+                .iter()
+                .map(|b| !b.fixed_points.is_empty() || !b.loads.is_empty()),
+        );
+        for c in &self.state.contacts.contacts {
+            limited[c.key.vertex_block as usize] = true;
+            limited[c.key.edge_block as usize] = true;
+        }
+        for b in &self.model.bolts {
+            limited[b.from_block] = true;
+            limited[b.to_block] = true;
+        }
+    }
+
     /// The largest step the blocks' current velocities allow: the smaller of d_max over
     /// the fastest vertex speed (strain rates included) and theta_max over the fastest
-    /// spin, infinite when nothing moves. Driven blocks count: the ground's motion is
-    /// held to d_max per step as a free block's.
+    /// spin of a block the limit holds ([`Simulation::mark_turn_limited`]), infinite
+    /// when nothing moves. Driven blocks count: the ground's motion is held to d_max per
+    /// step as a free block's.
     pub(crate) fn velocity_room(&self) -> f64 {
         let p = &self.model.params;
         let (mut speed, mut spin) = (0.0f64, 0.0f64);
@@ -76,7 +103,9 @@ impl Simulation {
                 continue;
             }
             let v = &self.state.blocks[i].velocity;
-            spin = spin.max(v[2].abs());
+            if self.scratch.turn_limited[i] {
+                spin = spin.max(v[2].abs());
+            }
             for &x in &s.vertices {
                 speed = speed.max(point_displacement(x, s.centroid, v).length());
             }
@@ -194,8 +223,9 @@ impl Simulation {
         v_n < -speed || (c.state.is_closed() && v_n > speed)
     }
 
-    /// Largest vertex displacement (first order) and largest |rotation| of the trial
-    /// solution, driven blocks included.
+    /// Largest vertex displacement (first order) and largest |rotation| of a block the
+    /// rotation limit holds ([`Simulation::mark_turn_limited`]) of the trial solution,
+    /// driven blocks included, and the block nearest its limits.
     pub(crate) fn largest_motion(&self) -> (f64, f64, Option<usize>) {
         let (mut disp, mut rot) = (0.0f64, 0.0f64);
         let (mut worst, mut worst_ratio) = (None, 0.0);
@@ -205,13 +235,18 @@ impl Simulation {
                 continue;
             }
             let d = &self.scratch.d[i];
-            rot = rot.max(d[2].abs());
+            let turn = if self.scratch.turn_limited[i] {
+                d[2].abs()
+            } else {
+                0.0
+            };
+            rot = rot.max(turn);
             let mut block_disp = 0.0f64;
             for &v in &s.vertices {
                 block_disp = block_disp.max(point_displacement(v, s.centroid, d).length());
             }
             disp = disp.max(block_disp);
-            let ratio = (block_disp / p.d_max).max(d[2].abs() / p.theta_max);
+            let ratio = (block_disp / p.d_max).max(turn / p.theta_max);
             if ratio > worst_ratio {
                 (worst, worst_ratio) = (Some(i), ratio);
             }
