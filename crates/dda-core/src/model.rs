@@ -31,10 +31,18 @@ impl Scene {
         }
         let (scene, dropped) = crate::regions::expand(self)?;
         let mut model = scene.validate_blocks()?;
-        for (i, n, area) in dropped.slivers {
+        for (i, n, area, min_area) in dropped.slivers {
+            let given = if self.regions[i].min_area.is_some() {
+                ""
+            } else {
+                "; min_area not given: the larger of 1e-9 of the region's area and d_tol^2"
+            };
             model.warnings.push(invalid(
                 format!("regions[{i}].min_area"),
-                format!("{n} pieces below min_area dropped ({area:.3e} m^2 in all)"),
+                format!(
+                    "{n} pieces smaller than {min_area:.3e} m^2 dropped ({area:.3e} m^2 in \
+                     all){given}"
+                ),
             ));
         }
         model.warnings.extend(self.stress_of_rigid_blocks(&model));
