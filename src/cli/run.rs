@@ -22,7 +22,7 @@ use dda::report::{
     BOLTS_HEADER, Frame, HISTORY_HEADER, MEASUREMENTS_HEADER, bolt_rows, counted, frame_resolution,
     frame_view, history_row, measurement_rows, shown,
 };
-use dda_core::{Checkpoint, RunOptions, Scene, SettlingSummary, Simulation, Summary};
+use dda_core::{Checkpoint, RunOptions, Scene, SettlingSummary, Simulation, StepRecord, Summary};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
 use std::fs::File;
@@ -642,6 +642,22 @@ impl Job {
             .map_err(|e| Failure::Output(format!("cannot write the checkpoint: {e}")))
     }
 
+    /// What holds the step, for the progress line: where a block's velocity held `rec`'s
+    /// dt below the step asked for, that block with its speed and spin; empty otherwise.
+    fn held_by(&self, rec: &StepRecord) -> String {
+        let Some(i) = rec.held_by else {
+            return String::new();
+        };
+        let i = i as usize;
+        let v = self.sim.blocks()[i].velocity;
+        format!(
+            " (held by `{}`: {:.3e} m/s, spin {:.3e} rad/s)",
+            self.sim.model().blocks[i].id,
+            v[0].hypot(v[1]),
+            v[2].abs()
+        )
+    }
+
     /// Settles the blocks before t = 0 (`Simulation::settle_watched`), their progress
     /// shown as the run's is (`bar`, or a line every `PROGRESS_EVERY` since `logged`), a
     /// signal heeded between the static steps (the blocks then left unsettled, to settle
@@ -787,7 +803,12 @@ impl Job {
                     }
                     if let Some(bar) = &bar {
                         bar.set_position((1000.0 * self.sim.time() / duration) as u64);
-                        bar.set_message(format!("t = {:.4} s", self.sim.time()));
+                        bar.set_message(format!(
+                            "t = {:.4} s, dt {:.1e} s{}",
+                            self.sim.time(),
+                            rec.dt,
+                            self.held_by(&rec)
+                        ));
                     }
                     if let Some(last) = logged.as_mut()
                         && last.elapsed() >= PROGRESS_EVERY
@@ -796,13 +817,14 @@ impl Job {
                         let totals = self.sim.totals();
                         eprintln!(
                             "t = {:.6} s of {duration} s ({:.0}%): {} steps, {} OCI iterations, \
-                             {} dt cuts, dt {:.3e} s; {:.0} s of wall time",
+                             {} dt cuts, dt {:.3e} s{}; {:.0} s of wall time",
                             self.sim.time(),
                             100.0 * self.sim.time() / duration,
                             totals.steps,
                             totals.oci_iterations,
                             totals.cuts,
                             rec.dt,
+                            self.held_by(&rec),
                             started.elapsed().as_secs_f64()
                         );
                     }

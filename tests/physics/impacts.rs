@@ -350,7 +350,8 @@ vertices = [[0.999, 0.5], [1.0, 0.5], [1.0, 1.5], [0.999, 1.5]]
 /// a fixed floor. In flight nothing holds it (no contact within d_tol, no fixed point,
 /// load or bolt), so the rotation limit theta_max (2 degrees) does not hold its steps:
 /// they are those d_max allows its vertices (10 mm at some 11 m/s), where theta_max
-/// would ask for 300 x 0.5 / 0.0349 = 4,297 steps in flight. Its flight is exact at any
+/// would ask for 300 x 0.5 / 0.0349 = 4,297 steps in flight (and the step records name
+/// the chip as what holds dt below the 1 ms asked for). Its flight is exact at any
 /// turn a step (the update turns a block exactly; nothing acts on it but gravity): its
 /// rotation is w t and its centroid at x0 + v t + g t^2 / 2 to 1e-9 at 0.5 s. It then
 /// lands under the guard, the limit holding it again once it has a contact.
@@ -389,9 +390,16 @@ angular_velocity = {w}
         Scene::parse(s, Format::Toml, "chip.toml").unwrap().1
     });
     let mut sim = guarded(parse(&text(t)));
-    sim.run(|_, _| {}).unwrap();
+    // Its speed holds the step below the 1 ms asked for, and the records say so.
+    let mut held = 0;
+    sim.run(|_, r| held += usize::from(r.held_by == Some(1)))
+        .unwrap();
     let steps = sim.totals().steps;
     assert!(steps < 1000, "{steps} steps in flight");
+    assert!(
+        held as u64 > steps / 2,
+        "held by the chip in {held} of {steps} steps"
+    );
     let chip = &sim.blocks()[1];
     let c = chip.polygon.centroid();
     assert!(

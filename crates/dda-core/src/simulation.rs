@@ -23,7 +23,7 @@ use crate::settle::Settling;
 use crate::solver::{BlockSystem, Entry, RankOne, SolverCounters};
 use crate::springs::{HalfStep, Row};
 use crate::state::{BlockState, RunState, StepRecord, Totals};
-use crate::time_step::{DT_FLOOR, motion_room, step_growth};
+use crate::time_step::{DT_FLOOR, MAX_GROWTH, easy_oci, motion_room, step_growth};
 use crate::timing::{Phase, Stopwatch};
 use dda_contact::{
     BlockShape, ContactDetector, ContactSet, DetectionParams, NeighbourPair, NeighbourSearch,
@@ -580,7 +580,13 @@ impl Simulation {
         let impact = self.impact_room();
         self.scratch.in_impact = impact.is_finite();
         self.mark_turn_limited();
-        let planned = self.state.dt.min(self.velocity_room()).min(impact);
+        let (room, fastest) = self.velocity_room();
+        let planned = self.state.dt.min(room).min(impact);
+        // The block whose velocity holds the step below the one asked for, if one does.
+        rec.held_by = (room < self.state.dt && room <= impact)
+            .then_some(fastest)
+            .flatten()
+            .map(|i| i as u32);
         // Land on `duration`; a remainder within 1e-6 of a step is taken with it rather
         // than left as a sliver step.
         let landing = planned * (1.0 + 1e-6) >= remaining;
@@ -623,6 +629,15 @@ impl Simulation {
                     // sign of a hard step.
                     let decided = iterations - not_hard;
                     let growth = step_growth(decided, max_oci, disp, rot, d_max, theta_max);
+                    // An easy step whose growth its motion bounded below the step asked
+                    // for: the block that moved most for its limits holds dt.
+                    if rec.held_by.is_none()
+                        && dt < dt0
+                        && decided <= easy_oci(max_oci)
+                        && growth < MAX_GROWTH
+                    {
+                        rec.held_by = moved_most.map(|i| i as u32);
+                    }
                     self.accept(dt, &mut rec, checked)?;
                     if landing {
                         self.state.t = target;

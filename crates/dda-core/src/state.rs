@@ -40,6 +40,13 @@ pub struct StepRecord {
     pub assembly_s: f64,
     /// Wall seconds factorising and solving.
     pub solve_s: f64,
+    /// The block whose motion held the step below the one asked for (docs/method.md
+    /// section 7), if a block's did: the one whose velocity at the step's start set the
+    /// step (its vertices' speed against d_max, or its spin against theta_max where that
+    /// limit holds it), or, after an easy step below the initial step whose growth its
+    /// motion bounded, the one that moved most for those limits.
+    #[serde(default)]
+    pub held_by: Option<u32>,
 }
 
 /// Cumulative counters of a run.

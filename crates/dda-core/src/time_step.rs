@@ -94,24 +94,33 @@ impl Simulation {
     /// The largest step the blocks' current velocities allow: the smaller of d_max over
     /// the fastest vertex speed (strain rates included) and theta_max over the fastest
     /// spin of a block the limit holds ([`Simulation::mark_turn_limited`]), infinite
-    /// when nothing moves. Driven blocks count: the ground's motion is held to d_max per
-    /// step as a free block's.
-    pub(crate) fn velocity_room(&self) -> f64 {
+    /// when nothing moves; and the block that sets it. Driven blocks count: the
+    /// ground's motion is held to d_max per step as a free block's.
+    pub(crate) fn velocity_room(&self) -> (f64, Option<usize>) {
         let p = &self.model.params;
         let (mut speed, mut spin) = (0.0f64, 0.0f64);
+        // The block taking the largest share of the limits, and that share.
+        let (mut block, mut most) = (None, 0.0f64);
         for (i, s) in self.scratch.shapes.iter().enumerate() {
             if self.free[i].is_none() && !self.model.blocks[i].driven {
                 continue;
             }
             let v = &self.state.blocks[i].velocity;
+            let mut fastest = 0.0f64;
+            for &x in &s.vertices {
+                fastest = fastest.max(point_displacement(x, s.centroid, v).length());
+            }
+            speed = speed.max(fastest);
+            let mut share = fastest / p.d_max;
             if self.scratch.turn_limited[i] {
                 spin = spin.max(v[2].abs());
+                share = share.max(v[2].abs() / p.theta_max);
             }
-            for &x in &s.vertices {
-                speed = speed.max(point_displacement(x, s.centroid, v).length());
+            if share > most {
+                (block, most) = (Some(i), share);
             }
         }
-        (p.d_max / speed).min(p.theta_max / spin)
+        ((p.d_max / speed).min(p.theta_max / spin), block)
     }
 
     /// The largest step `analysis.impact_steps` = N allows: for every pair of blocks in
