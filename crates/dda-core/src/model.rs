@@ -2,6 +2,7 @@
 //! range (`limits`), names resolved to indices, polygons built, the start checked
 //! (no overlaps; in a static analysis, every free block supported).
 
+use crate::detection::GLUE_SEAM;
 use crate::limits::{self, Range};
 use crate::scene::{
     Analysis, BlockSpec, Integration, Invalid, Joint, Material, Mode, Plane, Scene, SolverChoice,
@@ -27,6 +28,7 @@ impl Scene {
         if self.regions.is_empty() && self.joint_sets.is_empty() && self.excavations.is_empty() {
             let mut model = self.validate_blocks()?;
             model.warnings.extend(self.stress_of_rigid_blocks(&model));
+            model.warnings.extend(self.slivers_written(&model));
             return Ok((Cow::Borrowed(self), model));
         }
         let (scene, dropped) = crate::regions::expand(self)?;
@@ -46,7 +48,50 @@ impl Scene {
             ));
         }
         model.warnings.extend(self.stress_of_rigid_blocks(&model));
+        model.warnings.extend(self.slivers_written(&model));
         Ok((Cow::Owned(scene), model))
+    }
+
+    /// A warning where the scene writes a free block smaller than d_tol^2 wedged among
+    /// others (touching another as written, within 1e-3 d_tol, `GLUE_SEAM`; not a part
+    /// of a body, whose seams glue it): contact detection at d_tol does not resolve it, and such a sliver
+    /// between stiffer blocks can spin up numerically and hold every step
+    /// (docs/method.md section 10, where a region drops such pieces by default). A small
+    /// block thrown at others (the paper's hard cases) is not warned of. Names the
+    /// first, with how many more there are.
+    fn slivers_written(&self, model: &Model) -> Option<Invalid> {
+        let d_tol = model.params.d_tol;
+        let small: Vec<(usize, f64)> =
+            self.blocks
+                .iter()
+                .enumerate()
+                .filter(|(_, b)| !b.fixed && b.body.is_none())
+                .filter_map(|(i, b)| {
+                    let k = model.blocks.iter().position(|m| m.id == b.id)?;
+                    let poly = &model.blocks[k].polygon;
+                    let area = poly.area();
+                    let wedged = model.blocks.iter().enumerate().any(|(j, m)| {
+                        j != k && separation(poly, &m.polygon).0 <= GLUE_SEAM * d_tol
+                    });
+                    (area < d_tol * d_tol && wedged).then_some((i, area))
+                })
+                .collect();
+        let &(i, area) = small.first()?;
+        let more = match small.len() - 1 {
+            0 => String::new(),
+            n => format!(" ({n} more blocks are)"),
+        };
+        Some(invalid(
+            format!("blocks[{i}].vertices"),
+            format!(
+                "block `{}` is {area:.3e} m^2, smaller than d_tol^2 ({:.3e} m^2){more}: contact \
+                 detection does not resolve it, and a sliver between stiffer blocks can spin \
+                 up numerically and hold every step of the run; leave it out, or make it part \
+                 of a neighbour",
+                self.blocks[i].id,
+                d_tol * d_tol
+            ),
+        ))
     }
 
     /// A warning where a rigid analysis is given an initial stress, which its blocks

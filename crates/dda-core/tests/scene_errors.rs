@@ -305,6 +305,34 @@ fn initial_stress_in_a_rigid_analysis_is_warned_of() {
     assert!(w.message.contains("rigid"), "{w:?}");
 }
 
+/// A free block written smaller than d_tol^2 (here 1 mm square against d_tol = 2 mm) is
+/// warned of, naming it: contact detection does not resolve it, and such a sliver can
+/// spin up numerically. The scene still runs; one larger than d_tol^2 is not warned of.
+#[test]
+fn a_block_smaller_than_the_contact_tolerance_is_warned_of() {
+    let chip = |size: f64| {
+        GOOD.replace(
+            "fixed = true",
+            &format!(
+                "fixed = true\n[[blocks]]\nid = \"chip\"\nmaterial = \"rock\"\n\
+                 vertices = [[3.0, 1.0], [{x}, 1.0], [{x}, {y}], [3.0, {y}]]",
+                x = 3.0 + size,
+                y = 1.0 + size
+            ),
+        )
+    };
+    let (_, model) = Scene::parse(&chip(0.001), Format::Toml, "s.toml").expect("valid");
+    assert_eq!(model.warnings.len(), 1, "{:?}", model.warnings);
+    let w = &model.warnings[0];
+    assert_eq!(w.key, "blocks[1].vertices", "{w:?}");
+    assert!(
+        w.message.contains("`chip`") && w.message.contains("d_tol^2"),
+        "{w:?}"
+    );
+    let (_, model) = Scene::parse(&chip(0.0025), Format::Toml, "s.toml").expect("valid");
+    assert!(model.warnings.is_empty(), "{:?}", model.warnings);
+}
+
 const SLIDER_LINE: &str = "vertices = [[0.0, 1.0], [1.0, 1.0], [1.0, 2.0], [0.0, 2.0]]";
 
 #[test]
