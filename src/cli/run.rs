@@ -22,7 +22,9 @@ use dda::report::{
     BOLTS_HEADER, Frame, HISTORY_HEADER, MEASUREMENTS_HEADER, bolt_rows, counted, frame_resolution,
     frame_view, history_row, measurement_rows, shown,
 };
-use dda_core::{Checkpoint, RunOptions, Scene, SettlingSummary, Simulation, StepRecord, Summary};
+use dda_core::{
+    Checkpoint, HeldBy, RunOptions, Scene, SettlingSummary, Simulation, StepRecord, Summary,
+};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
 use std::fs::File;
@@ -63,6 +65,10 @@ struct OutputMarks {
     /// so that a resumed run's summary says it too).
     #[serde(default)]
     settling: Option<SettlingSummary>,
+    /// The steps each block held dt below the step asked for (summary.json's
+    /// `held_by`; kept here so that a resumed run counts them all).
+    #[serde(default)]
+    held: std::collections::BTreeMap<String, u64>,
 }
 
 /// Options of `run` and `resume` that bound or relax a run.
@@ -794,6 +800,10 @@ impl Job {
             }
             match self.sim.step() {
                 Ok(rec) => {
+                    if let Some(i) = rec.held_by {
+                        let id = &self.sim.model().blocks[i as usize].id;
+                        *self.marks.held.entry(id.clone()).or_default() += 1;
+                    }
                     self.write_history(&history_row(&rec))?;
                     self.write_tables()?;
                     self.sample_frames()?;
@@ -869,6 +879,18 @@ impl Job {
         summary.status = status.to_string();
         summary.source.clone_from(&self.marks.source);
         summary.settling = self.marks.settling;
+        let mut held: Vec<HeldBy> = self
+            .marks
+            .held
+            .iter()
+            .map(|(block, &steps)| HeldBy {
+                block: block.clone(),
+                steps,
+            })
+            .collect();
+        held.sort_by(|a, b| b.steps.cmp(&a.steps).then_with(|| a.block.cmp(&b.block)));
+        held.truncate(5);
+        summary.held_by = held;
         let json = serde_json::to_string_pretty(&summary)
             .map_err(|e| Failure::Output(format!("cannot serialise the summary: {e}")))?;
         write_new(&self.work.join("summary.json"), &(json + "\n"))?;
@@ -907,6 +929,16 @@ impl Job {
                 s.seconds.solve,
                 s.max_penetration
             );
+            if let Some(most) = s.held_by.first() {
+                let all: u64 = self.marks.held.values().sum();
+                eprintln!(
+                    "a block's motion held dt below the step asked for in {}, most often `{}` \
+                     ({}; summary.json `held_by`)",
+                    counted(all, "step"),
+                    most.block,
+                    counted(most.steps, "step")
+                );
+            }
             eprintln!("wrote {}", self.out.display());
         }
         for w in &summary.warnings {

@@ -968,6 +968,42 @@ fn a_run_with_nothing_resting_says_it_had_nothing_to_settle() {
     assert!(summary(&out).get("settling").is_none());
 }
 
+/// A run names the block whose motion held its time step: a chip thrown spinning at 300
+/// rad/s, the only free block, holds dt below the 1 ms asked for in most of its steps
+/// in flight, and summary.json's `held_by` lists it first, with the steps it held.
+#[test]
+fn a_run_names_the_block_that_held_its_time_step() {
+    let dir = scratch("held-by");
+    let scene = dir.join("chip.toml");
+    std::fs::write(
+        &scene,
+        "name = \"chip\"\n[analysis]\nduration = 0.3\ntime_step = 0.001\n\
+         max_displacement = 0.01\nnormal_penalty = 1e9\ngravity = [0.0, -9.81]\n\
+         [materials.rock]\ndensity = 2600.0\nyoung = 1e10\npoisson = 0.25\n\
+         [[blocks]]\nid = \"floor\"\nmaterial = \"rock\"\nfixed = true\n\
+         vertices = [[-1.0, -3.0], [5.0, -3.0], [5.0, -2.0], [-1.0, -2.0]]\n\
+         [[blocks]]\nid = \"chip\"\nmaterial = \"rock\"\n\
+         vertices = [[-0.015, -0.015], [0.015, -0.015], [0.015, 0.015], [-0.015, 0.015]]\n\
+         velocity = [2.0, 5.0]\nangular_velocity = 300.0\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = dda(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let said = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{said}");
+    let s = summary(&out);
+    let steps = s["steps"].as_u64().unwrap();
+    let held = &s["held_by"][0];
+    assert_eq!(held["block"], "chip", "{s}");
+    assert!(held["steps"].as_u64().unwrap() * 2 > steps, "{s}");
+    assert!(said.contains("most often `chip`"), "{said}");
+}
+
 /// A signal while the blocks settle (before t = 0) ends the settling at its next static
 /// step: exit 130, a checkpoint holding the blocks as the scene gave them (no step
 /// taken, not settled), a line naming `dda resume`; resumed, the run settles again and

@@ -50,6 +50,6 @@ pub use self::simulation::{RunOptions, Simulation, on_pool};
 pub use self::solver::{BlockSystem, RankOne, SolveError, SolverCounters};
 pub use self::state::{BlockState, RunState, Snapshot, StepRecord, Totals};
 pub use self::summary::{
-    BlockSummary, BoltSummary, Broken, Removed, Seconds, SettlingSummary, Summary,
+    BlockSummary, BoltSummary, Broken, HeldBy, Removed, Seconds, SettlingSummary, Summary,
 };
 pub use self::timing::Phase;

@@ -107,6 +107,20 @@ pub struct Summary {
     /// which times it: [`Summary::of`] leaves it `None`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub settling: Option<SettlingSummary>,
+    /// The blocks whose motion held dt below the step asked for, most steps first (at
+    /// most five; [`crate::StepRecord::held_by`], set by the caller, which sees every
+    /// step): where a run took more steps than its time step asks, what held it.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub held_by: Vec<HeldBy>,
+}
+
+/// A block that held the time step ([`Summary::held_by`]).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct HeldBy {
+    /// The block's id.
+    pub block: String,
+    /// The steps it held.
+    pub steps: u64,
 }
 
 /// What the settling did before t = 0 (docs/method.md section 13).
@@ -210,6 +224,7 @@ impl Summary {
             energy_excess: sim.energy_balance().worst_ratio,
             warnings: sim.violations().iter().map(|v| v.warning()).collect(),
             settling: None,
+            held_by: Vec::new(),
             bolts: sim
                 .model()
                 .bolts
