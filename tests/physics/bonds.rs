@@ -162,3 +162,52 @@ angular_velocity = {w}
     assert!(ra > 2.0 * std::f64::consts::PI, "turned {ra} rad");
     assert!((ra - rb).abs() <= 1e-6, "{ra} against {rb}");
 }
+
+/// A bond's strength acts over the faces' overlap, not over the longer face: a 1 m x
+/// 0.5 m block bonded to an 11 m bed (cohesion 1e4 Pa, no friction, no tensile
+/// strength), sheared along the bed by gravity tilted to gx, holds while m gx stays below
+/// the bond's 1e4 Pa x 1 m = 10 kN and slides beyond it: at gx = 5 m/s^2 (6.5 kN) it
+/// stays (its corners, each carrying half, stay in compression: the moment m gx x 0.25 m
+/// is a quarter of the weight's m g x 0.5 m), at gx = 10 m/s^2 (13 kN) it slides off.
+/// Taken over half the bed's length (until 2026-11-27) the bond held 110 kN, and both
+/// stayed.
+#[test]
+fn a_bond_holds_over_the_faces_overlap_not_over_the_longer_face() {
+    let slid = |gx: f64| {
+        let text = format!(
+            r#"
+name = "bed"
+[analysis]
+duration = 0.5
+time_step = 0.002
+max_displacement = 0.005
+normal_penalty = {P:e}
+gravity = [{gx}, -{G}]
+[materials.rock]
+density = {DENSITY}
+young = 1e10
+poisson = 0.25
+[joints.default]
+cohesion = 1e4
+[[blocks]]
+id = "bed"
+material = "rock"
+fixed = true
+vertices = [[-5.0, -1.0], [6.0, -1.0], [6.0, 0.0], [-5.0, 0.0]]
+[[blocks]]
+id = "block"
+material = "rock"
+vertices = [[0.0, 0.0], [1.0, 0.0], [1.0, 0.5], [0.0, 0.5]]
+"#
+        );
+        let (_, model) = Scene::parse(&text, Format::Toml, "bed.toml").unwrap();
+        let x0 = model.blocks[1].polygon.centroid().x;
+        let mut sim = Simulation::new(model, RunOptions::default());
+        sim.run(|_, _| {}).unwrap();
+        sim.blocks()[1].polygon.centroid().x - x0
+    };
+    let held = slid(5.0);
+    assert!(held.abs() < 1e-4, "gx 5: moved {held} m");
+    let gone = slid(10.0);
+    assert!(gone > 0.1, "gx 10: moved {gone} m");
+}

@@ -538,7 +538,8 @@ impl Simulation {
     pub(crate) fn friction_limit(&self, c: &Contact, j: &JointProps) -> f64 {
         let mut limit = c.normal_force.max(0.0) * j.tan_phi;
         if c.bonded {
-            limit += j.cohesion * contact_length(c, &self.scratch.shapes);
+            limit +=
+                j.cohesion * contact_length(c, &self.scratch.shapes, self.detection.sin_theta_e());
         }
         limit
     }

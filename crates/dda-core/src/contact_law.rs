@@ -331,6 +331,7 @@ impl Simulation {
         let (model, material, sc) = (&self.model, &self.material, &mut self.scratch);
         let (rows, shapes, half, d) = (&sc.rows, &sc.shapes, &sc.half, &sc.d);
         let (sheared, scale, motions) = (&sc.sheared, &sc.force_scale, &sc.motions);
+        let sin_e = self.detection.sin_theta_e();
         // Decides the contacts of `contacts` (the list's from `first` on), counting
         // each one's changes of state in `flips` where it has them, and lists in
         // `flipped` the contacts that changed state or sliding direction; returns how
@@ -362,7 +363,7 @@ impl Simulation {
                             || trial_ratio(&c, shapes, motions),
                             // Only bonds need the length: looked up (a load from the edge
                             // block's shape, often a cache miss) only for them.
-                            || contact_length(&c, shapes),
+                            || contact_length(&c, shapes, sin_e),
                         )
                     };
                     let count = flips.get(i).copied().unwrap_or(0);

@@ -206,11 +206,37 @@ pub fn shear_row(c: &Contact, shapes: &[BlockShape], half: &[HalfStep], anchor: 
     )
 }
 
-/// Length of the edge a contact's vertex lies against: the cohesion and tensile strength
-/// act over half of it (each end of a face-to-face contact carries half; a choice where
-/// Shi's formulation and the paper are silent).
-pub fn contact_length(c: &Contact, shapes: &[BlockShape]) -> f64 {
-    0.5 * shapes[c.key.edge_block as usize].lengths[c.key.edge as usize]
+/// The length a contact's cohesion and tensile strength act over: half the overlap of
+/// the edge its vertex lies against and the face of the vertex's block that runs along
+/// that edge (the one of the vertex's two edges within `sin_e`, sin theta_e, of
+/// parallel to it), so that the two ends of a face-to-face contact share the faces'
+/// overlap, as Shi's code takes it (`proj` in ntdda); 0 for a corner against an edge,
+/// with no face along it. Taking half the edge itself (until 2026-11-27) gave a block
+/// bonded to a long bed the strength of the bed's length: a 1 m block on an 11 m bed
+/// held 11 times its joint's strength.
+pub fn contact_length(c: &Contact, shapes: &[BlockShape], sin_e: f64) -> f64 {
+    let (edge, e) = (&shapes[c.key.edge_block as usize], c.key.edge as usize);
+    let (p0, t, len) = (edge.vertices[e], edge.tangents[e], edge.lengths[e]);
+    let block = &shapes[c.key.vertex_block as usize];
+    let (n, v) = (block.vertices.len(), c.key.vertex as usize);
+    let x = block.vertices[v];
+    // The vertex's two edges, as the segment from it to its neighbour.
+    let face = [block.vertices[(v + n - 1) % n], block.vertices[(v + 1) % n]]
+        .into_iter()
+        .filter(|q| {
+            let d = *q - x;
+            t.perp_dot(d).abs() <= sin_e * d.length()
+        })
+        .min_by(|a, b| {
+            let turn = |q: &DVec2| t.perp_dot((*q - x).normalize_or_zero()).abs();
+            turn(a).total_cmp(&turn(b))
+        });
+    let Some(q) = face else {
+        return 0.0;
+    };
+    let (sx, sq) = ((x - p0).dot(t), (q - p0).dot(t));
+    let overlap = sx.max(sq).min(len) - sx.min(sq).max(0.0);
+    0.5 * overlap.max(0.0)
 }
 
 #[cfg(test)]
@@ -237,6 +263,21 @@ mod tests {
             edge: 2,
         };
         (a, b, shapes, Contact::new(key, 0.01, 0.8, true))
+    }
+
+    /// A face-to-face contact's cohesion length is half the faces' overlap: square A
+    /// (x from 0.2 to 1.2) over square B (0 to 1) overlaps it by 0.8 m, so 0.4 m at each
+    /// end; a corner of a diamond against the same edge has no face along it, and 0.
+    #[test]
+    fn a_contact_length_is_half_the_faces_overlap() {
+        let (_, _, shapes, c) = corner_over_edge();
+        let sin_e = 4f64.to_radians().sin();
+        assert!((contact_length(&c, &shapes, sin_e) - 0.4).abs() < 1e-12);
+        let diamond =
+            ConvexPolygon::from_coords(&[[0.5, 1.01], [1.0, 1.51], [0.5, 2.01], [0.0, 1.51]])
+                .unwrap();
+        let shapes = [BlockShape::new(&diamond), shapes[1].clone()];
+        assert_eq!(contact_length(&c, &shapes, sin_e), 0.0);
     }
 
     /// Linearised at step start (blocks at rest), the normal row's value equals d_n at
