@@ -929,7 +929,9 @@ impl Job {
                 s.seconds.solve,
                 s.max_penetration
             );
-            if let Some(most) = s.held_by.first() {
+            // One block that held dt in half the run's steps or more sets its pace: say so
+            // (summary.json lists the blocks that held it in any case).
+            if let Some(most) = s.held_by.first().filter(|m| 2 * m.steps >= s.steps) {
                 let all: u64 = self.marks.held.values().sum();
                 eprintln!(
                     "a block's motion held dt below the step asked for in {}, most often `{}` \
