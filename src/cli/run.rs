@@ -802,7 +802,12 @@ impl Job {
                 Ok(rec) => {
                     if let Some(i) = rec.held_by {
                         let id = &self.sim.model().blocks[i as usize].id;
-                        *self.marks.held.entry(id.clone()).or_default() += 1;
+                        match self.marks.held.get_mut(id) {
+                            Some(n) => *n += 1,
+                            None => {
+                                self.marks.held.insert(id.clone(), 1);
+                            }
+                        }
                     }
                     self.write_history(&history_row(&rec))?;
                     self.write_tables()?;

@@ -83,6 +83,21 @@ fn run_file(file: &Path, out: &Path, extra: &[&str]) -> Output {
     dda(&args)
 }
 
+/// Writes `text` as a scene `dir/scene.toml` and runs it, not quiet, into `dir/out`: the
+/// output folder and what the run did (its standard error is the terminal report).
+fn run_text(dir: &Path, text: &str) -> (PathBuf, Output) {
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join("out");
+    let o = dda(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    (out, o)
+}
+
 fn summary(dir: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
 }
@@ -941,9 +956,8 @@ fn settling_wall(courses: usize) -> String {
 #[test]
 fn a_run_with_nothing_resting_says_it_had_nothing_to_settle() {
     let dir = scratch("nothing-to-settle");
-    let scene = dir.join("drop.toml");
-    std::fs::write(
-        &scene,
+    let (out, o) = run_text(
+        &dir,
         "name = \"drop\"\n[analysis]\nduration = 0.01\ntime_step = 0.001\n\
          max_displacement = 0.002\nnormal_penalty = 1e10\ngravity = [0.0, -9.81]\n\
          [materials.rock]\ndensity = 2600.0\nyoung = 1e9\npoisson = 0.25\n\
@@ -951,15 +965,7 @@ fn a_run_with_nothing_resting_says_it_had_nothing_to_settle() {
          vertices = [[0.0, -1.0], [4.0, -1.0], [4.0, 0.0], [0.0, 0.0]]\n\
          [[blocks]]\nid = \"stone\"\nmaterial = \"rock\"\n\
          vertices = [[1.0, 1.0], [2.0, 1.0], [2.0, 2.0], [1.0, 2.0]]\n",
-    )
-    .unwrap();
-    let out = dir.join("out");
-    let o = dda(&[
-        "run",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    );
     let said = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{said}");
     assert!(said.contains("settling: static steps"), "{said}");
@@ -974,9 +980,8 @@ fn a_run_with_nothing_resting_says_it_had_nothing_to_settle() {
 #[test]
 fn a_run_names_the_block_that_held_its_time_step() {
     let dir = scratch("held-by");
-    let scene = dir.join("chip.toml");
-    std::fs::write(
-        &scene,
+    let (out, o) = run_text(
+        &dir,
         "name = \"chip\"\n[analysis]\nduration = 0.3\ntime_step = 0.001\n\
          max_displacement = 0.01\nnormal_penalty = 1e9\ngravity = [0.0, -9.81]\n\
          [materials.rock]\ndensity = 2600.0\nyoung = 1e10\npoisson = 0.25\n\
@@ -985,15 +990,7 @@ fn a_run_names_the_block_that_held_its_time_step() {
          [[blocks]]\nid = \"chip\"\nmaterial = \"rock\"\n\
          vertices = [[-0.015, -0.015], [0.015, -0.015], [0.015, 0.015], [-0.015, 0.015]]\n\
          velocity = [2.0, 5.0]\nangular_velocity = 300.0\n",
-    )
-    .unwrap();
-    let out = dir.join("out");
-    let o = dda(&[
-        "run",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    );
     let said = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{said}");
     let s = summary(&out);

@@ -174,32 +174,13 @@ angular_velocity = {w}
 #[test]
 fn a_bond_holds_over_the_faces_overlap_not_over_the_longer_face() {
     let slid = |gx: f64| {
-        let text = format!(
-            r#"
-name = "bed"
-[analysis]
-duration = 0.5
-time_step = 0.002
-max_displacement = 0.005
-normal_penalty = {P:e}
-gravity = [{gx}, -{G}]
-[materials.rock]
-density = {DENSITY}
-young = 1e10
-poisson = 0.25
-[joints.default]
-cohesion = 1e4
-[[blocks]]
-id = "bed"
-material = "rock"
-fixed = true
-vertices = [[-5.0, -1.0], [6.0, -1.0], [6.0, 0.0], [-5.0, 0.0]]
-[[blocks]]
-id = "block"
-material = "rock"
-vertices = [[0.0, 0.0], [1.0, 0.0], [1.0, 0.5], [0.0, 0.5]]
-"#
-        );
+        // The scenes' header with the joint's cohesion alone, gravity tilted to gx.
+        let bed = "[[-5.0, -1.0], [6.0, -1.0], [6.0, 0.0], [-5.0, 0.0]]";
+        let block = "[[0.0, 0.0], [1.0, 0.0], [1.0, 0.5], [0.0, 0.5]]";
+        let text = scene(bed, block, 1e4, true, 0.5)
+            .replace("gravity = [0.0,", &format!("gravity = [{gx},"))
+            .replace("friction_deg = 35.0\n", "")
+            .replace("tensile_strength = 1e4\n", "");
         let (_, model) = Scene::parse(&text, Format::Toml, "bed.toml").unwrap();
         let x0 = model.blocks[1].polygon.centroid().x;
         let mut sim = Simulation::new(model, RunOptions::default());

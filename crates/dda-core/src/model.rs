@@ -61,21 +61,47 @@ impl Scene {
     /// first, with how many more there are.
     fn slivers_written(&self, model: &Model) -> Option<Invalid> {
         let d_tol = model.params.d_tol;
-        let small: Vec<(usize, f64)> =
-            self.blocks
-                .iter()
-                .enumerate()
-                .filter(|(_, b)| !b.fixed && b.body.is_none())
-                .filter_map(|(i, b)| {
-                    let k = model.blocks.iter().position(|m| m.id == b.id)?;
-                    let poly = &model.blocks[k].polygon;
-                    let area = poly.area();
-                    let wedged = model.blocks.iter().enumerate().any(|(j, m)| {
-                        j != k && separation(poly, &m.polygon).0 <= GLUE_SEAM * d_tol
-                    });
-                    (area < d_tol * d_tol && wedged).then_some((i, area))
-                })
-                .collect();
+        let touch = GLUE_SEAM * d_tol;
+        let index: BTreeMap<&str, usize> = model
+            .blocks
+            .iter()
+            .enumerate()
+            .map(|(k, m)| (m.id.as_str(), k))
+            .collect();
+        // (scene index, model index, area) of the small free blocks the scene writes (an
+        // excavation's pieces of one carry ids of their own, and are not written).
+        let small: Vec<(usize, usize, f64)> = self
+            .blocks
+            .iter()
+            .enumerate()
+            .filter(|(_, b)| !b.fixed && b.body.is_none())
+            .filter_map(|(i, b)| {
+                let k = *index.get(b.id.as_str())?;
+                let area = model.blocks[k].polygon.area();
+                (area < d_tol * d_tol).then_some((i, k, area))
+            })
+            .collect();
+        if small.is_empty() {
+            return None;
+        }
+        // Those that touch another, from the broad phase's pairs (a scene without small
+        // blocks pays none of it).
+        let boxes: Vec<_> = model.blocks.iter().map(|b| b.polygon.aabb()).collect();
+        let mut pairs = Vec::new();
+        dda_contact::neighbour_pairs(&boxes, touch, &mut pairs);
+        let mut touching = vec![false; model.blocks.len()];
+        for q in &pairs {
+            let (a, b) = (q.a as usize, q.b as usize);
+            if separation(&model.blocks[a].polygon, &model.blocks[b].polygon).0 <= touch {
+                touching[a] = true;
+                touching[b] = true;
+            }
+        }
+        let small: Vec<(usize, f64)> = small
+            .into_iter()
+            .filter(|&(_, k, _)| touching[k])
+            .map(|(i, _, area)| (i, area))
+            .collect();
         let &(i, area) = small.first()?;
         let more = match small.len() - 1 {
             0 => String::new(),
