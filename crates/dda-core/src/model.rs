@@ -47,6 +47,21 @@ impl Scene {
                 ),
             ));
         }
+        for (x, n, area, small) in dropped.excavated {
+            let (parts, are) = if n == 1 {
+                ("part", "is")
+            } else {
+                ("parts", "are")
+            };
+            model.warnings.push(invalid(
+                format!("excavations[{x}].vertices"),
+                format!(
+                    "{n} {parts} of the blocks it cuts, outside the outline, {are} smaller \
+                     than d_tol^2 ({small:.3e} m^2; {area:.3e} m^2 in all): slivers below \
+                     what contact detection resolves, dropped"
+                ),
+            ));
+        }
         model.warnings.extend(self.stress_of_rigid_blocks(&model));
         model.warnings.extend(self.slivers_written(&model));
         Ok((Cow::Owned(scene), model))

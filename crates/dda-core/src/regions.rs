@@ -16,12 +16,16 @@ use dda_geom::{
 };
 use std::collections::BTreeMap;
 
-/// What expanding the regions dropped: per region, the pieces below its `min_area`.
+/// What expanding the regions dropped: per region, the pieces below its `min_area`; per
+/// excavation, the slivers its cutting left outside its outline.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Dropped {
     /// (region index, pieces dropped, their total area in m^2, the `min_area` applied),
     /// for regions that dropped any.
     pub slivers: Vec<(usize, usize, f64, f64)>,
+    /// (excavation index, slivers dropped, their total area in m^2, the area below
+    /// which a part is a sliver: d_tol^2), for excavations that dropped any.
+    pub excavated: Vec<(usize, usize, f64, f64)>,
 }
 
 /// The statistical family of a `[joint_sets.NAME]` entry, its values checked.
@@ -360,8 +364,12 @@ pub fn expand(scene: &Scene) -> Result<(Scene, Dropped), Invalid> {
         }
     }
     let excavations = std::mem::take(&mut out.excavations);
+    let small = written_d_tol(&scene.analysis).map_or(0.0, |d| d * d);
     for (x, e) in excavations.iter().enumerate() {
-        excavate(&mut out, x, e)?;
+        let (n, area) = excavate(&mut out, x, e, small)?;
+        if n > 0 {
+            dropped.excavated.push((x, n, area, small));
+        }
     }
     let free = |b: &&BlockSpec| !b.fixed;
     if !excavations.is_empty()
@@ -391,15 +399,17 @@ pub fn expand(scene: &Scene) -> Result<(Scene, Dropped), Invalid> {
 /// (docs/method.md section 10). The analysis here is as written, not yet validated: a
 /// d_tol that is no length leaves the rounding default.
 fn default_min_area(analysis: &crate::scene::Analysis, area: f64) -> f64 {
+    let rounding = 1e-9 * area;
+    written_d_tol(analysis).map_or(rounding, |d_tol| rounding.max(d_tol * d_tol))
+}
+
+/// d_tol as the scene writes it (`contact_tolerance`, else 2 `max_displacement`), not yet
+/// validated: None where it is no length.
+fn written_d_tol(analysis: &crate::scene::Analysis) -> Option<f64> {
     let d_tol = analysis
         .contact_tolerance
         .unwrap_or(2.0 * analysis.max_displacement);
-    let rounding = 1e-9 * area;
-    if d_tol.is_finite() && d_tol > 0.0 {
-        rounding.max(d_tol * d_tol)
-    } else {
-        rounding
-    }
+    (d_tol.is_finite() && d_tol > 0.0).then_some(d_tol)
 }
 
 /// The initial stress of region `r`'s blocks (`key` its entry) as a function of a
@@ -455,8 +465,16 @@ fn in_situ_stress(
 /// the pieces inside it `removed_at = at`. The pieces of one block stay one body, glued
 /// (the rock is intact across the outline until the excavation), and take the block's
 /// velocity, stress and edge joints; its loads and fixed points go to the piece that
-/// holds them.
-fn excavate(scene: &mut Scene, x: usize, e: &ExcavationSpec) -> Result<(), Invalid> {
+/// holds them. A part of the cutting smaller than `small` (d_tol^2) outside the outline,
+/// a sliver between the outline and a face or corner of the block close to it, is below
+/// what contact detection at d_tol resolves, and is dropped as a region drops its
+/// slivers (docs/method.md section 10). Returns how many it dropped, and their area.
+fn excavate(
+    scene: &mut Scene,
+    x: usize,
+    e: &ExcavationSpec,
+    small: f64,
+) -> Result<(usize, f64), Invalid> {
     let key = format!("excavations[{x}]");
     if e.id.trim().is_empty() {
         return Err(invalid(format!("{key}.id"), "must not be empty"));
@@ -490,6 +508,7 @@ fn excavate(scene: &mut Scene, x: usize, e: &ExcavationSpec) -> Result<(), Inval
         .collect();
     let bounds = outline.aabb();
     let mut removes = false;
+    let mut slivers = (0, 0.0);
     let blocks = std::mem::take(&mut scene.blocks);
     for b in blocks {
         let Ok(poly) = ConvexPolygon::from_coords(&b.vertices) else {
@@ -530,7 +549,21 @@ fn excavate(scene: &mut Scene, x: usize, e: &ExcavationSpec) -> Result<(), Inval
         }
         let body = b.body.clone().unwrap_or_else(|| b.id.clone());
         let eps = 1e-9 * poly.diameter();
-        let all: Vec<ConvexPolygon> = cut.pieces.iter().flat_map(|p| p.parts.clone()).collect();
+        // A part smaller than d_tol^2 outside the outline is a sliver between the
+        // outline and a face or corner of the block close to it: dropped (unless it holds
+        // one of the block's loads or fixed points).
+        let sliver = |piece: &dda_geom::Piece, part: &ConvexPolygon| {
+            let holds = |q: [f64; 2]| part.contains_within(DVec2::from(q), eps);
+            part.area() < small
+                && !inside(piece)
+                && !b.loads.iter().any(|l| holds(l.at))
+                && !b.fixed_points.iter().any(|&q| holds(q))
+        };
+        let all: Vec<ConvexPolygon> = cut
+            .pieces
+            .iter()
+            .flat_map(|p| p.parts.iter().filter(|q| !sliver(p, q)).cloned())
+            .collect();
         // The block's own seams, if it was a part of a body already.
         let was_glued = |k: usize| match &b.glued_edges {
             Some(g) => g.contains(&k),
@@ -541,6 +574,11 @@ fn excavate(scene: &mut Scene, x: usize, e: &ExcavationSpec) -> Result<(), Inval
             let gone = inside(piece);
             removes |= gone;
             for part in &piece.parts {
+                if sliver(piece, part) {
+                    slivers.0 += 1;
+                    slivers.1 += part.area();
+                    continue;
+                }
                 m += 1;
                 let pv = part.vertices();
                 let holds = |q: DVec2| part.contains_within(q, eps);
@@ -603,7 +641,7 @@ fn excavate(scene: &mut Scene, x: usize, e: &ExcavationSpec) -> Result<(), Inval
             ),
         ));
     }
-    Ok(())
+    Ok(slivers)
 }
 
 /// Whether a load at `at` of block `id` went to an earlier piece of it already (a load
