@@ -691,10 +691,12 @@ joint_sets = ["bed", "cross"]
 /// detection resolves: in an open pit of 750 blocks under the conventional type-1
 /// detector, one of 7e-5 m^2 (cut in two by the next bench) flew off at 117 and 209 m/s.
 /// The cutting drops it, with a warning that names the excavation, and keeps every part
-/// larger; nothing else of the block outside the outline is lost.
+/// larger; nothing else of the block outside the outline is lost. A sliver that holds
+/// a measured point (or a bolt's end, a load, a fixed point) is kept, so that the point
+/// still lies in rock.
 #[test]
 fn an_excavation_drops_the_slivers_its_outline_cuts_off() {
-    let scene = |point: f64| {
+    let scene = |point: f64, measured: &str| {
         format!(
             r#"
 name = "sliver-cut"
@@ -725,15 +727,24 @@ vertices = [[0.0, 1.0], [4.0, 1.0], [4.0, 2.0], [0.0, 2.0]]
 id = "notch"
 at = 0.05
 vertices = [[2.0, {point}], [3.0, 2.5], [1.0, 2.5]]
+{measured}
 "#
         )
     };
+    let in_sliver = "[[measure]]\nid = \"under\"\nat = [2.0, 1.001]";
     let d_tol = 2.0 * 0.005;
     // The rock of `high` (4 m x 1 m from y = 1) outside the notch, whose point is at
     // (2, point) and which is 2 m wide at y = 2.5.
     let outside = |point: f64| 4.0 - (2.0 - point).powi(2) / (2.5 - point);
+    let (_, kept) =
+        Scene::parse(&scene(1.006, in_sliver), Format::Toml, "sliver-cut.toml").unwrap();
+    assert!(kept.warnings.is_empty(), "{:?}", kept.warnings);
+    assert!(
+        kept.blocks.iter().any(|b| b.polygon.area() < d_tol * d_tol),
+        "the sliver holding the measured point was dropped"
+    );
     for (point, sliver) in [(1.006, true), (1.5, false)] {
-        let (_, model) = Scene::parse(&scene(point), Format::Toml, "sliver-cut.toml").unwrap();
+        let (_, model) = Scene::parse(&scene(point, ""), Format::Toml, "sliver-cut.toml").unwrap();
         let high: Vec<_> = model
             .blocks
             .iter()

@@ -509,6 +509,11 @@ fn excavate(
     let bounds = outline.aabb();
     let mut removes = false;
     let mut slivers = (0, 0.0);
+    // The points a sliver holding one is kept for: bolts' ends and measured points.
+    let anchors: Vec<[f64; 2]> = (scene.bolts.iter())
+        .flat_map(|b| [b.from, b.to])
+        .chain(scene.measure.iter().map(|m| m.at))
+        .collect();
     let blocks = std::mem::take(&mut scene.blocks);
     for b in blocks {
         let Ok(poly) = ConvexPolygon::from_coords(&b.vertices) else {
@@ -550,14 +555,14 @@ fn excavate(
         let body = b.body.clone().unwrap_or_else(|| b.id.clone());
         let eps = 1e-9 * poly.diameter();
         // A part smaller than d_tol^2 outside the outline is a sliver between the
-        // outline and a face or corner of the block close to it: dropped (unless it holds
-        // one of the block's loads or fixed points).
+        // outline and a face or corner of the block close to it: dropped, unless it holds
+        // one of the block's loads or fixed points, a bolt's end or a measured point.
         let sliver = |piece: &dda_geom::Piece, part: &ConvexPolygon| {
             let holds = |q: [f64; 2]| part.contains_within(DVec2::from(q), eps);
             part.area() < small
                 && !inside(piece)
                 && !b.loads.iter().any(|l| holds(l.at))
-                && !b.fixed_points.iter().any(|&q| holds(q))
+                && !b.fixed_points.iter().chain(&anchors).any(|&q| holds(q))
         };
         let all: Vec<ConvexPolygon> = cut
             .pieces
