@@ -88,14 +88,18 @@ const SETTLE_TOLERANCE: f64 = 1e-5;
 /// that lock and slide in turn can hold the change at a floor; the slow convergence of
 /// a wall's slide halves it every 20 to 140 steps. At 20 (until 2026-11-24) the walls
 /// above stopped after 22 steps and parted by 20% to 57%. The count starts once the
-/// steps have grown to the settling's own size, or after this many steps if they have
-/// not: a jointed mass of 345 blocks (two persistent sets, 60 m x 30 m) took 150 to
+/// steps have grown to the settling's own size, or after half of [`SETTLE_MAX_STEPS`]
+/// if they have not: a jointed mass of 345 blocks (two persistent sets, 60 m x 30 m) took 150 to
 /// 250 steps to grow its first step, cut to 4.6e-5 s where its junctions' contacts
 /// would not converge, to 0.0125 s; counted from the first step, the stall stopped it
 /// at 256 steps, its contacts a third loaded, and the run started with the mass falling
 /// at 0.64 g (`a_jointed_mass_settles_onto_its_contacts`, `tests/physics/regions.rs`).
-/// Counted only at full size, a random jointed mass under TB-CD-1, whose steps never
-/// got there, ran to the 2,000-step cap (6.7 s) and kept the step it kept at 245.
+/// Two random jointed masses took 861 and 1,073 steps to converge, their steps at full
+/// size only after the 200th (started from the 200th, the count stopped them at 431
+/// and 470 steps, unsettled). A random jointed mass under TB-CD-1, whose steps never
+/// got there, runs to 1,200 steps and ends at the steadiest step it ended at when the
+/// count started at the first (the 50th); counted only at full size, it ran to the
+/// 2,000-step cap.
 const SETTLE_STALL: u32 = 200;
 
 /// The inertia of a settling step, 2 m / dt^2 for the heaviest block, is at most this
@@ -559,9 +563,9 @@ impl Simulation {
             // The stall's clock starts once the steps have grown to the settling's own
             // size: before, a step moves the blocks by a small part of what loads their
             // contacts, and its change is no measure of progress. Steps held below it
-            // for as long as the stall itself (contacts whose open-close iteration keeps
+            // for half the settling's steps (contacts whose open-close iteration keeps
             // failing) start it all the same.
-            full |= record.dt >= self.model.params.dt0 || n >= SETTLE_STALL;
+            full |= record.dt >= self.model.params.dt0 || n >= SETTLE_MAX_STEPS / 2;
             if change <= 0.5 * best || !full {
                 (best, best_at) = (change, n);
             } else if n - best_at >= SETTLE_STALL {
