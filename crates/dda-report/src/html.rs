@@ -190,6 +190,7 @@ td, th {{ border: 1px solid #ccc; padding: 2px 8px; text-align: left; }}
 .failed {{ color: #b00020; }}
 #controls {{ display: flex; gap: 1em; align-items: center; margin: 0.5em 0; }}
 #viewing {{ margin: 0.3em 0; font-size: 90%; }}
+#viewing label {{ margin-right: 1em; }}
 #hover {{ font-weight: bold; }}
 #slider {{ flex: 1; }}
 canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
