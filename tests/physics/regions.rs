@@ -691,9 +691,10 @@ joint_sets = ["bed", "cross"]
 /// detection resolves: in an open pit of 750 blocks under the conventional type-1
 /// detector, one of 7e-5 m^2 (cut in two by the next bench) flew off at 117 and 209 m/s.
 /// The cutting drops it, with a warning that names the excavation, and keeps every part
-/// larger; nothing else of the block outside the outline is lost. A sliver that holds
-/// a measured point (or a bolt's end, a load, a fixed point) is kept, so that the point
-/// still lies in rock.
+/// larger; nothing else of the block outside the outline is lost, even where d_tol^2 is
+/// larger than the block (a part goes only below a tenth of its block too). A sliver
+/// that holds a measured point (or a bolt's end, a load, a fixed point) is kept, so
+/// that the point still lies in rock.
 #[test]
 fn an_excavation_drops_the_slivers_its_outline_cuts_off() {
     let scene = |point: f64, measured: &str| {
@@ -742,6 +743,24 @@ vertices = [[2.0, {point}], [3.0, 2.5], [1.0, 2.5]]
     assert!(
         kept.blocks.iter().any(|b| b.polygon.area() < d_tol * d_tol),
         "the sliver holding the measured point was dropped"
+    );
+    // With a d_tol of 5 m (d_tol^2 = 25 m^2, more than the whole 4 m^2 block), only the
+    // sliver goes: a part is dropped only below a tenth of its block as well.
+    let coarse = scene(1.006, "").replace(
+        "max_displacement = 0.005",
+        "max_displacement = 0.005\ncontact_tolerance = 5.0",
+    );
+    let (_, model) = Scene::parse(&coarse, Format::Toml, "sliver-cut.toml").unwrap();
+    let left: f64 = model
+        .blocks
+        .iter()
+        .filter(|b| b.id.starts_with("high.") && b.removed_at.is_none())
+        .map(|b| b.polygon.area())
+        .sum();
+    let lost = outside(1.006) - left;
+    assert!(
+        lost > 0.0 && lost < d_tol * d_tol,
+        "coarse d_tol: {lost} m^2 lost"
     );
     for (point, sliver) in [(1.006, true), (1.5, false)] {
         let (_, model) = Scene::parse(&scene(point, ""), Format::Toml, "sliver-cut.toml").unwrap();

@@ -48,17 +48,18 @@ impl Scene {
             ));
         }
         for (x, n, area, small) in dropped.excavated {
-            let (parts, are) = if n == 1 {
-                ("part", "is")
+            let (parts, are, its) = if n == 1 {
+                ("part", "is", "its")
             } else {
-                ("parts", "are")
+                ("parts", "are", "their")
             };
             model.warnings.push(invalid(
                 format!("excavations[{x}].vertices"),
                 format!(
                     "{n} {parts} of the blocks it cuts, outside the outline, {are} smaller \
-                     than d_tol^2 ({small:.3e} m^2; {area:.3e} m^2 in all): slivers below \
-                     what contact detection resolves, dropped"
+                     than d_tol^2 ({small:.3e} m^2) and than a tenth of {its} block \
+                     ({area:.3e} m^2 in all): slivers below what contact detection \
+                     resolves, dropped"
                 ),
             ));
         }

@@ -465,10 +465,11 @@ fn in_situ_stress(
 /// the pieces inside it `removed_at = at`. The pieces of one block stay one body, glued
 /// (the rock is intact across the outline until the excavation), and take the block's
 /// velocity, stress and edge joints; its loads and fixed points go to the piece that
-/// holds them. A part of the cutting smaller than `small` (d_tol^2) outside the outline,
-/// a sliver between the outline and a face or corner of the block close to it, is below
-/// what contact detection at d_tol resolves, and is dropped as a region drops its
-/// slivers (docs/method.md section 10). Returns how many it dropped, and their area.
+/// holds them. A part of the cutting outside the outline smaller than `small` (d_tol^2)
+/// and than a tenth of its block, a sliver between the outline and a face or corner of
+/// the block close to it, is below what contact detection at d_tol resolves, and is
+/// dropped as a region drops its slivers (docs/method.md section 10). Returns how many
+/// it dropped, and their area.
 fn excavate(
     scene: &mut Scene,
     x: usize,
@@ -554,12 +555,15 @@ fn excavate(
         }
         let body = b.body.clone().unwrap_or_else(|| b.id.clone());
         let eps = 1e-9 * poly.diameter();
-        // A part smaller than d_tol^2 outside the outline is a sliver between the
-        // outline and a face or corner of the block close to it: dropped, unless it holds
-        // one of the block's loads or fixed points, a bolt's end or a measured point.
+        // A part outside the outline smaller than d_tol^2, and than a tenth of the
+        // block, is a sliver between the outline and a face or corner of the block close
+        // to it: dropped, unless it holds one of the block's loads or fixed points, a
+        // bolt's end or a measured point. (A block that is itself below d_tol^2 is
+        // warned of as such, and its pieces kept.)
+        let sliver_area = small.min(0.1 * poly.area());
         let sliver = |piece: &dda_geom::Piece, part: &ConvexPolygon| {
             let holds = |q: [f64; 2]| part.contains_within(DVec2::from(q), eps);
-            part.area() < small
+            part.area() < sliver_area
                 && !inside(piece)
                 && !b.loads.iter().any(|l| holds(l.at))
                 && !b.fixed_points.iter().chain(&anchors).any(|&q| holds(q))
