@@ -561,29 +561,35 @@ fn excavate(
         // bolt's end or a measured point. (A block that is itself below d_tol^2 is
         // warned of as such, and its pieces kept.)
         let sliver_area = small.min(0.1 * poly.area());
-        let sliver = |piece: &dda_geom::Piece, part: &ConvexPolygon| {
-            let holds = |q: [f64; 2]| part.contains_within(DVec2::from(q), eps);
-            part.area() < sliver_area
-                && !inside(piece)
-                && !b.loads.iter().any(|l| holds(l.at))
-                && !b.fixed_points.iter().chain(&anchors).any(|&q| holds(q))
-        };
-        let all: Vec<ConvexPolygon> = cut
-            .pieces
-            .iter()
-            .flat_map(|p| p.parts.iter().filter(|q| !sliver(p, q)).cloned())
+        // Each part in the cut's order: whether it is such a sliver.
+        let sliver: Vec<bool> = (cut.pieces.iter())
+            .flat_map(|piece| piece.parts.iter().map(move |part| (piece, part)))
+            .map(|(piece, part)| {
+                let holds = |q: [f64; 2]| part.contains_within(DVec2::from(q), eps);
+                part.area() < sliver_area
+                    && !inside(piece)
+                    && !b.loads.iter().any(|l| holds(l.at))
+                    && !b.fixed_points.iter().chain(&anchors).any(|&q| holds(q))
+            })
+            .collect();
+        let all: Vec<ConvexPolygon> = (cut.pieces.iter())
+            .flat_map(|p| &p.parts)
+            .zip(&sliver)
+            .filter(|(_, s)| !**s)
+            .map(|(part, _)| part.clone())
             .collect();
         // The block's own seams, if it was a part of a body already.
         let was_glued = |k: usize| match &b.glued_edges {
             Some(g) => g.contains(&k),
             None => b.body.is_some(),
         };
-        let mut m = 0;
+        let (mut m, mut k) = (0, 0);
         for piece in &cut.pieces {
             let gone = inside(piece);
             removes |= gone;
             for part in &piece.parts {
-                if sliver(piece, part) {
+                k += 1;
+                if sliver[k - 1] {
                     slivers.0 += 1;
                     slivers.1 += part.area();
                     continue;

@@ -89,11 +89,12 @@ const SETTLE_TOLERANCE: f64 = 1e-5;
 /// a wall's slide halves it every 20 to 140 steps. At 20 (until 2026-11-24) the walls
 /// above stopped after 22 steps and parted by 20% to 57%. The count starts once the
 /// steps have grown to the settling's own size, or after half of [`SETTLE_MAX_STEPS`]
-/// if they have not: a jointed mass of 345 blocks (two persistent sets, 60 m x 30 m) took 150 to
-/// 250 steps to grow its first step, cut to 4.6e-5 s where its junctions' contacts
-/// would not converge, to 0.0125 s; counted from the first step, the stall stopped it
-/// at 256 steps, its contacts a third loaded, and the run started with the mass falling
-/// at 0.64 g (`a_jointed_mass_settles_onto_its_contacts`, `tests/physics/regions.rs`).
+/// if they have not: a jointed mass of 345 blocks (two persistent sets, 60 m x 30 m)
+/// took 150 to 250 steps to grow its first step, cut to 4.6e-5 s where its junctions'
+/// contacts would not converge, to 0.0125 s; counted from the first step, the stall
+/// stopped it at 256 steps, its contacts a third loaded, and the run started with the
+/// mass falling at 0.64 g (`a_jointed_mass_settles_onto_its_contacts`,
+/// `tests/physics/regions.rs`).
 /// Two random jointed masses took 861 and 1,073 steps to converge, their steps at full
 /// size only after the 200th (started from the 200th, the count stopped them at 431
 /// and 470 steps, unsettled). A random jointed mass under TB-CD-1, whose steps never
