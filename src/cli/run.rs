@@ -681,7 +681,10 @@ impl Job {
         let outcome = self.sim.settle_watched(|p| {
             caught = signals.caught();
             if let Some(bar) = bar {
-                bar.set_message(format!("settling: {} static steps", p.steps));
+                bar.set_message(format!(
+                    "settling: {} static steps, dt {:.1e} s of {:.1e} s",
+                    p.steps, p.dt, p.full_dt
+                ));
                 bar.tick();
             }
             if let Some(last) = logged.as_mut()
@@ -698,9 +701,11 @@ impl Job {
                     "a new round".to_string()
                 };
                 eprintln!(
-                    "settling: {} static steps, {change} (settled at 1e-5); {:.0} s of \
-                     wall time",
+                    "settling: {} static steps, dt {:.1e} s (growing to {:.1e} s), {change} \
+                     (settled at 1e-5); {:.0} s of wall time",
                     p.steps,
+                    p.dt,
+                    p.full_dt,
                     began.elapsed().as_secs_f64()
                 );
             }

@@ -609,7 +609,8 @@ fn columns_slide_below_their_toppling_limit_and_topple_above_it() {
 /// a watcher returning false stops it with the blocks as the scene gave them and the
 /// settling still to do, and settling again from there ends in the same state, bit for
 /// bit, as settling at once (a run interrupted while it settles resumes as it would have
-/// gone on).
+/// gone on). Each report says how long its static step was, against the settling's own
+/// step (`dda run` shows both).
 #[test]
 fn a_settling_stopped_and_taken_again_ends_as_one_taken_at_once() {
     let (text, _) = stack(6, 1, false, 35.0, 20.0, "");
@@ -621,10 +622,11 @@ fn a_settling_stopped_and_taken_again_ends_as_one_taken_at_once() {
             .collect()
     };
     let mut once = Simulation::new(model(), RunOptions::default());
-    let mut seen = Vec::new();
+    let (mut seen, mut sizes) = (Vec::new(), Vec::new());
     assert!(
         once.settle_watched(|p| {
             seen.push(p.steps);
+            sizes.push((p.dt, p.full_dt));
             true
         })
         .unwrap()
@@ -632,6 +634,14 @@ fn a_settling_stopped_and_taken_again_ends_as_one_taken_at_once() {
     let steps = once.settling().unwrap().steps;
     assert!(steps > 5, "settled in {steps} steps");
     assert_eq!(seen, (1..=steps).collect::<Vec<_>>());
+    // Each report gives its static step's size, the first shorter than the settling's
+    // own (its inertia the penalty), none longer.
+    let full = sizes[0].1;
+    assert!(sizes[0].0 < full, "{:?}", sizes[0]);
+    for &(dt, of) in &sizes {
+        assert_eq!(of, full);
+        assert!(dt > 0.0 && dt <= full, "dt {dt} of {full}");
+    }
 
     let mut stopped = Simulation::new(model(), RunOptions::default());
     let start = polygons(&stopped);

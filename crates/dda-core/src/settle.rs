@@ -202,6 +202,11 @@ pub struct SettleProgress {
     /// alone would move them where that is less (infinite for a round's first step):
     /// the settling has converged at 1e-5.
     pub change: f64,
+    /// The size of the static step just taken, s: it starts short and grows to
+    /// `full_dt` over easy steps; the blocks load their contacts once it is there.
+    pub dt: f64,
+    /// The settling's own step, s (docs/method.md section 13).
+    pub full_dt: f64,
 }
 
 /// What the settling did before t = 0 ([`Simulation::settling`]).
@@ -554,6 +559,8 @@ impl Simulation {
             let progress = SettleProgress {
                 steps: done + n,
                 change: report.change,
+                dt: record.dt,
+                full_dt: self.model.params.dt0,
             };
             if !watch(&progress) {
                 report.interrupted = true;
