@@ -6,7 +6,8 @@
 //!   penalty is too soft for the motion, or a contact was lost.
 //! - **Energy.** The mechanical energy (kinetic plus elastic strain) never exceeds what
 //!   the scene supplied, its initial kinetic and strain energy plus the work that
-//!   gravity, point loads, bolts and a moving ground have done since, by more than
+//!   gravity, point loads, bolts and a moving ground have done since, less the energy
+//!   of the rock excavated (`Simulation::excavate_due`), by more than
 //!   [`ENERGY_TOLERANCE`] of a reference: the largest supply so far plus the energy
 //!   the model cannot resolve (every free block lowered by d_tol under gravity, and a
 //!   contact spring pressed by the overlap validation allows at the start, 1e-9 of the
@@ -34,7 +35,8 @@ pub const ENERGY_TOLERANCE: f64 = 0.01;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct EnergyBalance {
     /// Initial kinetic and strain energy plus the work of gravity, point loads, bolts
-    /// and a moving ground so far.
+    /// and a moving ground so far, less the kinetic and strain energy of the blocks
+    /// excavated.
     pub supplied: f64,
     /// Largest `supplied` so far.
     pub supplied_max: f64,

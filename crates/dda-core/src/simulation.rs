@@ -290,10 +290,7 @@ impl Simulation {
             let overlap = 1e-9 * b.polygon.diameter();
             energy_floor +=
                 mat.density * m.area * g * p.d_tol + 0.5 * p.normal_penalty * overlap * overlap;
-            initial += guard::kinetic(&mass_matrix(&m, mat.density), &b.velocity);
-            if effects.elasticity {
-                initial += guard::strain(m.area, &b.stress, mat.young, mat.poisson);
-            }
+            initial += own_energy(&model, effects.elasticity, b, i);
         }
         let dt0 = p.dt0;
         let n_bolts = model.bolts.len();
@@ -378,8 +375,33 @@ impl Simulation {
                 gains: Vec::new(),
             },
         };
-        sim.remove_due(0.0);
+        sim.excavate_due(0.0);
         sim
+    }
+
+    /// Removes the blocks excavated by `t` ([`Simulation::remove_due`]), and their
+    /// kinetic and strain energy from the energy the physics guard counts as supplied:
+    /// the rock takes its energy out of the system with it. Left in the supply, an
+    /// excavated block's strain energy (large under in-situ stress) would let the rest
+    /// of the run create as much unseen.
+    pub(crate) fn excavate_due(&mut self, t: f64) {
+        let taken: f64 = (0..self.removed.len())
+            .filter(|&i| {
+                !self.removed[i]
+                    && !self.model.blocks[i].fixed
+                    && self.model.blocks[i].removed_at.is_some_and(|at| at <= t)
+            })
+            .map(|i| {
+                own_energy(
+                    &self.model,
+                    self.effects.elasticity,
+                    &self.state.blocks[i],
+                    i,
+                )
+            })
+            .sum();
+        self.state.energy.supplied -= taken;
+        self.remove_due(t);
     }
 
     /// Removes the blocks whose `removed_at` is at or before `t` and not removed yet: they
@@ -547,7 +569,7 @@ impl Simulation {
             // reaches them.
             Ok(_) => {
                 self.break_bolts();
-                self.remove_due(self.state.t);
+                self.excavate_due(self.state.t);
             }
         }
         result
@@ -681,4 +703,16 @@ impl Simulation {
         self.state.totals.total_s += started.seconds();
         Ok(rec)
     }
+}
+
+/// Block `i`'s kinetic energy and, where blocks are elastic, its strain energy, J/m: its
+/// share of the energy the physics guard counts (`crate::guard`).
+fn own_energy(model: &Model, elastic: bool, b: &BlockState, i: usize) -> f64 {
+    let mat = model.materials[model.blocks[i].material];
+    let m = b.polygon.moments();
+    let mut e = guard::kinetic(&mass_matrix(&m, mat.density), &b.velocity);
+    if elastic {
+        e += guard::strain(m.area, &b.stress, mat.young, mat.poisson);
+    }
+    e
 }
