@@ -73,7 +73,8 @@ use dda_geom::{DVec2, Groups, displace_point};
 const SETTLE_MAX_STEPS: u32 = 2000;
 
 /// The settling has converged when no vertex's motion in a step differs from its motion
-/// in the step before by more than this share of the first step's largest motion. Our
+/// in the step before by more than this share of the settling's scale (the first step's
+/// largest motion, at most [`SETTLE_FREE_FLIGHT`] times the blocks' free flight). Our
 /// choice, measured on running-bond walls of 1 x 0.5 m bricks with half bricks at the
 /// course ends, 8 courses of 5 on 30/25 (p 3e10 to 1e12, dt 1 ms): their steady slide
 /// takes hundreds of steps to converge (the pieces of the wall slide at rates that
