@@ -622,15 +622,28 @@ fn every_example_runs_to_its_end_under_the_guard() {
 /// after 0.01 s stays below a hundredth of free fall's, g t.
 #[test]
 fn a_jointed_mass_settles_onto_its_contacts() {
-    const SCENE: &str = r#"
+    let sets = "[joint_sets.bed]\ndip_deg = 15.0\nspacing = 2.0\njoint = \"bed\"\n\
+                [joint_sets.cross]\ndip_deg = 100.0\nspacing = 3.0\n";
+    starts_at_rest(&boxed_mass(0.01, "", sets, 0.0, 60.0, 30.0), "cover");
+}
+
+/// A jointed rock mass in a fixed box (floor and sides 3 m thick) filling it from x0 to
+/// x1 and up to h, cut by the joint sets `sets` ("bed", its joint at 28 degrees, and
+/// "cross", at the default 35): E = 10 GPa, p = 2e10 N/m, plane strain, gravity, run for
+/// `duration` s; `analysis` adds to the scene's analysis.
+fn boxed_mass(duration: f64, analysis: &str, sets: &str, x0: f64, x1: f64, h: f64) -> String {
+    let (a, b) = (x0 - 3.0, x1 + 3.0);
+    format!(
+        r#"
 name = "jointed-mass"
 [analysis]
-duration = 0.01
+duration = {duration}
 time_step = 0.002
 max_displacement = 0.005
 normal_penalty = 2e10
 gravity = [0.0, -9.81]
 plane = "strain"
+{analysis}
 [materials.rock]
 density = 2600.0
 young = 10e9
@@ -639,39 +652,39 @@ poisson = 0.25
 friction_deg = 35.0
 [joints.bed]
 friction_deg = 28.0
-[joint_sets.bed]
-dip_deg = 15.0
-spacing = 2.0
-joint = "bed"
-[joint_sets.cross]
-dip_deg = 100.0
-spacing = 3.0
+{sets}
 [[blocks]]
 id = "floor"
 material = "rock"
 fixed = true
-vertices = [[-3.0, -3.0], [63.0, -3.0], [63.0, 0.0], [-3.0, 0.0]]
+vertices = [[{a:?}, -3.0], [{b:?}, -3.0], [{b:?}, 0.0], [{a:?}, 0.0]]
 [[blocks]]
 id = "left"
 material = "rock"
 fixed = true
-vertices = [[-3.0, 0.0], [0.0, 0.0], [0.0, 30.0], [-3.0, 30.0]]
+vertices = [[{a:?}, 0.0], [{x0:?}, 0.0], [{x0:?}, {h:?}], [{a:?}, {h:?}]]
 [[blocks]]
 id = "right"
 material = "rock"
 fixed = true
-vertices = [[60.0, 0.0], [63.0, 0.0], [63.0, 30.0], [60.0, 30.0]]
+vertices = [[{x1:?}, 0.0], [{b:?}, 0.0], [{b:?}, {h:?}], [{x1:?}, {h:?}]]
 [[regions]]
 id = "mass"
 material = "rock"
-vertices = [[0.0, 0.0], [60.0, 0.0], [60.0, 30.0], [0.0, 30.0]]
+vertices = [[{x0:?}, 0.0], [{x1:?}, 0.0], [{x1:?}, {h:?}], [{x0:?}, {h:?}]]
 joint_sets = ["bed", "cross"]
-"#;
-    let (_, model) = Scene::parse(SCENE, Format::Toml, "jointed-mass.toml").unwrap();
+"#
+    )
+}
+
+/// Runs scene `text` (`what` names it in messages): its settling converges, and every
+/// block's speed at the end stays below a hundredth of free fall's, g t.
+fn starts_at_rest(text: &str, what: &str) {
+    let (_, model) = Scene::parse(text, Format::Toml, "jointed-mass.toml").unwrap();
     let mut sim = Simulation::new(model, RunOptions::default());
     sim.run(|_, _| {}).unwrap();
     let settling = sim.settling().unwrap();
-    assert!(settling.converged, "{settling:?}");
+    assert!(settling.converged, "{what}: {settling:?}");
     let fastest = sim
         .blocks()
         .iter()
@@ -680,7 +693,7 @@ joint_sets = ["bed", "cross"]
     let free_fall = 9.81 * sim.time();
     assert!(
         fastest < 1e-2 * free_fall,
-        "fastest block {fastest} m/s after {} s",
+        "{what}: fastest block {fastest} m/s after {} s",
         sim.time()
     );
 }
@@ -765,74 +778,14 @@ fn excavated_rock_takes_its_energy_out_of_the_balance() {
 /// `a_jointed_mass_settles_onto_its_contacts`, with every detector.
 #[test]
 fn a_settling_is_judged_against_the_forces_not_a_detectors_first_push() {
-    const SCENE: &str = r#"
-name = "jointed-mass-type-2"
-[analysis]
-duration = 0.02
-time_step = 0.002
-max_displacement = 0.005
-normal_penalty = 2e10
-gravity = [0.0, -9.81]
-plane = "strain"
-detector = "type-2"
-[materials.rock]
-density = 2600.0
-young = 10e9
-poisson = 0.25
-[joints.default]
-friction_deg = 35.0
-[joints.bed]
-friction_deg = 28.0
-[joint_sets.bed]
-dip_deg = 19.3
-spacing = 2.4
-offset = 0.74
-joint = "bed"
-[joint_sets.cross]
-dip_deg = 133.0
-spacing = 2.83
-offset = 0.03
-trace_length = 5.8
-bridge = 1.5
-seed = 5
-[[blocks]]
-id = "floor"
-material = "rock"
-fixed = true
-vertices = [[7.0, -3.0], [33.0, -3.0], [33.0, 0.0], [7.0, 0.0]]
-[[blocks]]
-id = "left"
-material = "rock"
-fixed = true
-vertices = [[7.0, 0.0], [10.0, 0.0], [10.0, 10.0], [7.0, 10.0]]
-[[blocks]]
-id = "right"
-material = "rock"
-fixed = true
-vertices = [[30.0, 0.0], [33.0, 0.0], [33.0, 10.0], [30.0, 10.0]]
-[[regions]]
-id = "mass"
-material = "rock"
-vertices = [[10.0, 0.0], [30.0, 0.0], [30.0, 10.0], [10.0, 10.0]]
-joint_sets = ["bed", "cross"]
-"#;
+    let sets = "[joint_sets.bed]\ndip_deg = 19.3\nspacing = 2.4\noffset = 0.74\n\
+                joint = \"bed\"\n[joint_sets.cross]\ndip_deg = 133.0\nspacing = 2.83\n\
+                offset = 0.03\ntrace_length = 5.8\nbridge = 1.5\nseed = 5\n";
     for detector in ["type-2", "type-1", "cover"] {
-        let text = SCENE.replace("\"type-2\"", &format!("\"{detector}\""));
-        let (_, model) = Scene::parse(&text, Format::Toml, "jointed-mass.toml").unwrap();
-        let mut sim = Simulation::new(model, RunOptions::default());
-        sim.run(|_, _| {}).unwrap();
-        let settling = sim.settling().unwrap();
-        assert!(settling.converged, "{detector}: {settling:?}");
-        let fastest = sim
-            .blocks()
-            .iter()
-            .map(|b| DVec2::new(b.velocity[0], b.velocity[1]).length())
-            .fold(0.0, f64::max);
-        let free_fall = 9.81 * sim.time();
-        assert!(
-            fastest < 1e-2 * free_fall,
-            "{detector}: fastest block {fastest} m/s after {} s",
-            sim.time()
+        let analysis = format!("detector = \"{detector}\"");
+        starts_at_rest(
+            &boxed_mass(0.02, &analysis, sets, 10.0, 30.0, 10.0),
+            detector,
         );
     }
 }

@@ -799,7 +799,6 @@ impl Simulation {
         p * apart <= band || apart < SETTLE_APART * steady[a].length().max(steady[b].length())
     }
 
-    /// The vertices of every free block, block by block.
     /// The largest motion of a free vertex, over `dt^2 / 2`, that the forces of the step
     /// just taken would give its block on its own, contacts aside: each free block's
     /// step terms (its inertia at `dt`, elasticity, weight, loads, initial stress, fixed
@@ -831,6 +830,7 @@ impl Simulation {
         reach
     }
 
+    /// The vertices of every free block, block by block.
     fn free_vertices(&self) -> Vec<DVec2> {
         self.free_blocks
             .iter()

@@ -385,12 +385,9 @@ impl Simulation {
     /// excavated block's strain energy (large under in-situ stress) would let the rest
     /// of the run create as much unseen.
     pub(crate) fn excavate_due(&mut self, t: f64) {
-        let taken: f64 = (0..self.removed.len())
-            .filter(|&i| {
-                !self.removed[i]
-                    && !self.model.blocks[i].fixed
-                    && self.model.blocks[i].removed_at.is_some_and(|at| at <= t)
-            })
+        let due = self.due(t);
+        let taken: f64 = (due.iter().copied())
+            .filter(|&i| !self.model.blocks[i].fixed)
             .map(|i| {
                 own_energy(
                     &self.model,
@@ -401,22 +398,32 @@ impl Simulation {
             })
             .sum();
         self.state.energy.supplied -= taken;
-        self.remove_due(t);
+        self.remove(&due);
+    }
+
+    /// The blocks excavated by `t` and not removed yet.
+    fn due(&self, t: f64) -> Vec<usize> {
+        (0..self.removed.len())
+            .filter(|&i| {
+                !self.removed[i] && self.model.blocks[i].removed_at.is_some_and(|at| at <= t)
+            })
+            .collect()
     }
 
     /// Removes the blocks whose `removed_at` is at or before `t` and not removed yet: they
     /// leave the system (the free blocks are numbered again and the matrix pattern is
     /// made anew) and the contact search; their state stays as it was, at rest.
     pub(crate) fn remove_due(&mut self, t: f64) {
-        let due: Vec<usize> = (0..self.removed.len())
-            .filter(|&i| {
-                !self.removed[i] && self.model.blocks[i].removed_at.is_some_and(|at| at <= t)
-            })
-            .collect();
+        let due = self.due(t);
+        self.remove(&due);
+    }
+
+    /// Removes blocks `due` (see [`Simulation::remove_due`]).
+    fn remove(&mut self, due: &[usize]) {
         if due.is_empty() {
             return;
         }
-        for &i in &due {
+        for &i in due {
             self.removed[i] = true;
             self.state.blocks[i].velocity = [0.0; 6];
         }
