@@ -92,6 +92,7 @@ impl TerritoryDetector {
         params: &DetectionParams,
         with_vertex_pairs: bool,
         out: &mut Vec<Contact>,
+        flush_ends: &mut Vec<ContactKey>,
     ) {
         let tol = params.d_tol;
         let tol2 = tol * tol;
@@ -110,9 +111,13 @@ impl TerritoryDetector {
                         // Resolve a vertex pair the same way from either side (lower block
                         // first), so a pair found twice gives one contact.
                         if vb < eb {
-                            resolve_vertex_pair(vs, vb, i, es, eb, j, sin_e, slack, out);
+                            resolve_vertex_pair(
+                                vs, vb, i, es, eb, j, sin_e, slack, out, flush_ends,
+                            );
                         } else {
-                            resolve_vertex_pair(es, eb, j, vs, vb, i, sin_e, slack, out);
+                            resolve_vertex_pair(
+                                es, eb, j, vs, vb, i, sin_e, slack, out, flush_ends,
+                            );
                         }
                     }
                 }
@@ -150,7 +155,9 @@ impl TerritoryDetector {
 ///   the other's edge (its projection ratio in [0, 1]) touches that edge; if both do,
 ///   the deeper behind it, and if they are as deep, the vertex whose next edge is in the
 ///   flush pair touches the other block's previous edge (one vertex-edge contact per
-///   flush pair, the same whichever block is `p`, with shear and friction);
+///   flush pair, the same whichever block is `p`, with shear and friction); its key goes
+///   to `flush_ends` where its corner is behind the edge's line, along the edge (r in
+///   [0, 1]) and outside the other block, so that [`exits`] keeps it;
 /// - otherwise the pair is a vertex-vertex contact: of the pairs (vertex i, each edge at
 ///   j) and (vertex j, each edge at i) passing the entrance filter, the one with the
 ///   largest d_n, marked [`Contact::vertex_vertex`] (a normal spring only).
@@ -165,6 +172,7 @@ fn resolve_vertex_pair(
     sin_e: f64,
     slack: f64,
     out: &mut Vec<Contact>,
+    flush_ends: &mut Vec<ContactKey>,
 ) {
     let contact = |vs: &BlockShape, vb: u32, v: usize, es: &BlockShape, eb: u32, e: usize| {
         let m = VertexEdge::new(vs.vertices[v], es.vertices[e], es.vertices[es.next(e)]);
@@ -199,15 +207,24 @@ fn resolve_vertex_pair(
     };
     let (ip, jp) = (p.prev(i), q.prev(j));
     let mut edge_edge = false;
+    // A joint's end whose corner lies along the other's edge but outside the other block
+    // (past the face at the edge's end, as the joint's compression pushes an acute
+    // corner): `exits` keeps it.
+    let mut end = |c: Contact| {
+        if c.d_n < 0.0 && (0.0..=1.0).contains(&c.r) && !inside(&c) {
+            flush_ends.push(c.key);
+        }
+        out.push(c);
+    };
     if flush(p.tangents[i], q.tangents[jp]) {
-        out.push(end_of(
+        end(end_of(
             contact(p, pb, i, q, qb, jp),
             contact(q, qb, j, p, pb, i),
         ));
         edge_edge = true;
     }
     if flush(p.tangents[ip], q.tangents[j]) {
-        out.push(end_of(
+        end(end_of(
             contact(q, qb, j, p, pb, ip),
             contact(p, pb, i, q, qb, j),
         ));
@@ -256,10 +273,11 @@ impl ContactDetector for TerritoryDetector {
         out: &mut Vec<Contact>,
     ) {
         let start = out.len();
-        self.classify(a, ids.a, b, ids.b, params, true, out);
+        let mut flush_ends = Vec::new();
+        self.classify(a, ids.a, b, ids.b, params, true, out, &mut flush_ends);
         // Disk territories are symmetric: vertex pairs were all found from A's side.
         let again = self.territory == Territory::NormalBounded;
-        self.classify(b, ids.b, a, ids.a, params, again, out);
+        self.classify(b, ids.b, a, ids.a, params, again, out, &mut flush_ends);
         // A vertex pair and an edge territory may name the same vertex-edge pair: the
         // vertex is then in the edge's territory, and the contact is a vertex-edge one.
         let mine = &mut out[start..];
@@ -273,7 +291,7 @@ impl ContactDetector for TerritoryDetector {
         }
         out.truncate(keep);
         let shape = |id: u32| if id == ids.a { a } else { b };
-        exits(out, start, shape, params.d_tol);
+        exits(out, start, shape, params.d_tol, &flush_ends);
     }
 }
 
@@ -304,7 +322,10 @@ fn outside(p: DVec2, s: &BlockShape, slack: f64) -> bool {
 /// - a vertex outside the other block (in front of the line of one of its edges by more
 ///   than [`OUTSIDE`] d_tol) has no contact behind a line: it lies beyond a sharp corner,
 ///   in the strip of an edge that does not bound it there, and a spring would push it
-///   through a penetration it does not have;
+///   through a penetration it does not have; except the contact Shi's rule chose for the
+///   end of a flush joint (`flush_ends`, from [`resolve_vertex_pair`]): a joint's
+///   compression c pushes an acute corner at its end past the other block's outer face
+///   (by c cos alpha), and without that contact the joint would turn about its other end;
 /// - a vertex inside keeps only the contact it is least deep behind: it leaves the block
 ///   by the shortest exit, as Shi's rule decides for a vertex pair, rather than be pushed
 ///   out through two faces at once (a second contact appearing already penetrated
@@ -314,6 +335,7 @@ fn exits<'s>(
     start: usize,
     shape: impl Fn(u32) -> &'s BlockShape,
     d_tol: f64,
+    flush_ends: &[ContactKey],
 ) {
     let slack = OUTSIDE * d_tol;
     let mut keep = start;
@@ -330,7 +352,8 @@ fn exits<'s>(
             .filter(|&m| out[m].d_n < 0.0 && inside)
             .max_by(|&a, &b| out[a].d_n.total_cmp(&out[b].d_n).then(b.cmp(&a)));
         for m in k..end {
-            if out[m].d_n >= 0.0 || Some(m) == exit {
+            let joint_end = !inside && flush_ends.contains(&out[m].key);
+            if out[m].d_n >= 0.0 || Some(m) == exit || joint_end {
                 out[keep] = out[m];
                 keep += 1;
             }
@@ -555,6 +578,38 @@ mod tests {
                 "{}: {got:?}",
                 det.name()
             );
+        }
+    }
+
+    #[test]
+    fn a_compressed_joint_keeps_its_end_between_acute_corners() {
+        // A voussoir-like pair: the joint runs up x = 0, a right-angled end at y = 0 and an
+        // end of two acute corners (78.7 degrees) at y = 1, where the blocks' upper faces
+        // fall away from the joint. B is pressed 1e-6 into A, so each top corner is
+        // 1e-6 behind the other's joint face and 2e-7 in front of its upper face: outside
+        // the other block. The joint keeps one contact at each end, with shear (an arch's
+        // joint that lost its top end turned about its bottom one); the top end's other
+        // corner, in type-2's edge band, gets none (two springs at one end). (At the
+        // right-angled end, whose corners lie exactly on each other's lower face, type-2
+        // gives each corner its contact, as before.)
+        let c = 1e-6;
+        let a = shape(&[[-1.0, 0.0], [0.0, 0.0], [0.0, 1.0], [-1.0, 0.8]]);
+        let b = shape(&[[-c, 0.0], [1.0 - c, 0.0], [1.0 - c, 0.8], [-c, 1.0]]);
+        for det in [TerritoryDetector::type1(), TerritoryDetector::type2()] {
+            let got = contacts(det, &a, &b, 0.02);
+            let at = |y: f64| -> Vec<&Contact> {
+                got.iter()
+                    .filter(|k| {
+                        let s = if k.key.vertex_block == 0 { &a } else { &b };
+                        k.d_n < 0.0 && s.vertices[k.key.vertex as usize].y == y
+                    })
+                    .collect()
+            };
+            let (top, bottom) = (at(1.0), at(0.0));
+            assert_eq!(top.len(), 1, "{}: {got:?}", det.name());
+            assert!(!bottom.is_empty(), "{}: {got:?}", det.name());
+            assert!((top[0].d_n + c).abs() < 1e-12, "{}: {top:?}", det.name());
+            assert!(!top[0].vertex_vertex, "{}: {top:?}", det.name());
         }
     }
 }
