@@ -170,6 +170,8 @@ fn detect_range(
             if !deep {
                 keep_closed(shapes, before, start, list);
             }
+        } else {
+            keep_bonded(shapes, params.d_tol, before, start, list);
         }
         if list.len() == start {
             continue;
@@ -200,6 +202,45 @@ fn detect_range(
             end: list.len() as u32,
             deep,
         });
+    }
+}
+
+/// Appends, as active candidates, the bonded contacts closed at the end of the previous
+/// step (`before`) that a detector without [`ContactDetector::keeps_closed_contacts`] did
+/// not list (those at `list[start..]`), while the vertex lies within `d_tol` of its edge's
+/// line and along the edge to within `d_tol` past an end: a bond (the glue between parts
+/// of one body, a cohesive joint) holds until the contact law breaks it, not until a
+/// detector's local choice at a corner drops it. The type-based detectors choose one of
+/// a seam end's two corners afresh each step, and their rule that a vertex outside the
+/// other block has no contact behind a line drops the other; the glue there went with
+/// it, and a glued sliver part sank through its body (docs/method.md section 5).
+fn keep_bonded(
+    shapes: &[BlockShape],
+    d_tol: f64,
+    before: &[Contact],
+    start: usize,
+    list: &mut Vec<Contact>,
+) {
+    let listed = list.len();
+    for old in before
+        .iter()
+        .filter(|o| o.active && o.bonded && o.state.is_closed())
+    {
+        let k = old.key;
+        if list[start..listed].iter().any(|c| c.key == k) {
+            continue;
+        }
+        let (vs, es) = (
+            &shapes[k.vertex_block as usize],
+            &shapes[k.edge_block as usize],
+        );
+        let e = k.edge as usize;
+        let (p0, p1) = (es.vertices[e], es.vertices[es.next(e)]);
+        let m = VertexEdge::new(vs.vertices[k.vertex as usize], p0, p1);
+        let past = d_tol / p0.distance(p1);
+        if m.d_n.abs() <= d_tol && (-past..=1.0 + past).contains(&m.r) {
+            list.push(Contact::new(k, m.d_n, m.r, true));
+        }
     }
 }
 

@@ -367,6 +367,7 @@ fn exits<'s>(
 mod tests {
     use super::*;
 
+    use crate::contact::{ContactSet, ContactState};
     use crate::test_util::{IDS, shape, tuple};
 
     fn run(
@@ -610,6 +611,55 @@ mod tests {
             assert!(!bottom.is_empty(), "{}: {got:?}", det.name());
             assert!((top[0].d_n + c).abs() < 1e-12, "{}: {top:?}", det.name());
             assert!(!top[0].vertex_vertex, "{}: {top:?}", det.name());
+        }
+    }
+
+    #[test]
+    fn a_bond_outlives_the_outside_rule() {
+        // The geometry of the sharp-corner test above: A's corner 0 is 0.005 behind B's
+        // underside (edge 0) but outside B, so neither type-based detector lists it. A
+        // bonded contact it closed in the step before is carried on, active, with its
+        // state (a glued seam's end or a cohesive joint holds until the contact law
+        // breaks it); an unbonded one is not.
+        let b = shape(&[[-1.0, 0.0], [0.0, 0.0], [-1.0, 1.0]]);
+        let a = shape(&[[-0.002, 0.005], [-0.3, -0.3], [0.3, -0.3]]);
+        let key = ContactKey {
+            vertex_block: 0,
+            vertex: 0,
+            edge_block: 1,
+            edge: 0,
+        };
+        let shapes = [a, b];
+        let params = DetectionParams::new(0.02, 2f64.to_radians());
+        for det in [TerritoryDetector::type1(), TerritoryDetector::type2()] {
+            for bonded in [true, false] {
+                let old = Contact {
+                    bonded,
+                    locked_r: 0.9,
+                    ..Contact::new(key, -0.004, 0.998, true)
+                };
+                let previous = ContactSet {
+                    pairs: vec![crate::contact::PairContacts {
+                        pair: IDS,
+                        start: 0,
+                        end: 1,
+                        deep: false,
+                    }],
+                    contacts: vec![old],
+                };
+                let mut out = ContactSet::default();
+                crate::detect(&det, &shapes, &[IDS], &params, &previous, false, &mut out);
+                let kept = out.find(&key);
+                if bonded {
+                    let c = kept.unwrap_or_else(|| panic!("{}: {out:?}", det.name()));
+                    assert!(c.active && c.bonded, "{}: {c:?}", det.name());
+                    assert_eq!(c.state, ContactState::Locked, "{}", det.name());
+                    assert_eq!(c.locked_r, 0.9, "{}", det.name());
+                    assert!((c.d_n + 0.005).abs() < 1e-12, "{}: {c:?}", det.name());
+                } else {
+                    assert!(kept.is_none(), "{}: {out:?}", det.name());
+                }
+            }
         }
     }
 }
