@@ -423,7 +423,7 @@ mod tests {
     use crate::contact::ContactSet;
     use crate::detector::track;
 
-    use crate::test_util::{IDS, shape, tuple};
+    use crate::test_util::{IDS, pair_set, shape, tuple};
 
     fn params() -> DetectionParams {
         DetectionParams::new(0.1, 2f64.to_radians())
@@ -522,18 +522,7 @@ mod tests {
             c.state = crate::ContactState::Sliding;
             c
         };
-        let detect_after = |before: Vec<Contact>| {
-            let previous = ContactSet {
-                pairs: vec![crate::contact::PairContacts {
-                    pair: IDS,
-                    start: 0,
-                    end: before.len() as u32,
-                    deep: false,
-                }],
-                contacts: before,
-            };
-            detect_pair_set(&shapes, &previous)
-        };
+        let detect_after = |before: Vec<Contact>| detect_pair_set(&shapes, &pair_set(before));
         let set = detect_after(vec![closed(2)]);
         let active: Vec<_> = set.active().map(|c| (tuple(c.key), c.d_n)).collect();
         assert_eq!(active.len(), 1, "{active:?}");
@@ -566,15 +555,7 @@ mod tests {
         };
         let mut closed = Contact::new(key(0), -0.2, 2.0 / 3.0, true);
         closed.state = crate::ContactState::Sliding;
-        let previous = ContactSet {
-            pairs: vec![crate::contact::PairContacts {
-                pair: IDS,
-                start: 0,
-                end: 1,
-                deep: false,
-            }],
-            contacts: vec![closed],
-        };
+        let previous = pair_set(vec![closed]);
         let set = detect_pair_set(&shapes, &previous);
         assert!(set.pairs[0].deep);
         assert_eq!(keys(&set.contacts, true), vec![tuple(key(0))]);

@@ -368,7 +368,7 @@ mod tests {
     use super::*;
 
     use crate::contact::{ContactSet, ContactState};
-    use crate::test_util::{IDS, shape, tuple};
+    use crate::test_util::{IDS, pair_set, shape, tuple};
 
     fn run(
         det: TerritoryDetector,
@@ -638,15 +638,7 @@ mod tests {
                     locked_r: 0.9,
                     ..Contact::new(key, -0.004, 0.998, true)
                 };
-                let previous = ContactSet {
-                    pairs: vec![crate::contact::PairContacts {
-                        pair: IDS,
-                        start: 0,
-                        end: 1,
-                        deep: false,
-                    }],
-                    contacts: vec![old],
-                };
+                let previous = pair_set(vec![old]);
                 let mut out = ContactSet::default();
                 crate::detect(&det, &shapes, &[IDS], &params, &previous, false, &mut out);
                 let kept = out.find(&key);
