@@ -352,7 +352,8 @@ fn exits<'s>(
             .filter(|&m| out[m].d_n < 0.0 && inside)
             .max_by(|&a, &b| out[a].d_n.total_cmp(&out[b].d_n).then(b.cmp(&a)));
         for m in k..end {
-            let joint_end = !inside && flush_ends.contains(&out[m].key);
+            // Listed only for a corner outside the other block (`resolve_vertex_pair`).
+            let joint_end = flush_ends.contains(&out[m].key);
             if out[m].d_n >= 0.0 || Some(m) == exit || joint_end {
                 out[keep] = out[m];
                 keep += 1;
