@@ -307,6 +307,100 @@ fn glued_seams_keep_their_springs_where_the_parts_meet_corner_to_corner() {
     }
 }
 
+/// A body whose joining part is excavated comes apart: what the parts left share is no
+/// longer intact rock. Three glued parts, one above the other: `L` on a fixed base, its
+/// top sloping down at 15 degrees; `M` on it, with a level top; a small `T` on `M`. `M`
+/// is removed at 0.01 s, and `T` falls onto `L`'s slope, a seam of the body until then,
+/// with no joint of its own between the two (frictionless). It must land on it and slide
+/// down it with every detector, never sinking into `L` beyond d_tol: it falls some 0.5 m
+/// (0.33 s), and from rest on a frictionless 15-degree slope it would slide 0.5 g sin 15
+/// t^2 = 0.57 m in the 0.67 s left, 0.55 m across; a part glued where it lands would only
+/// turn about that corner onto the slope (some 0.05 m), so more than 0.2 m across. Before the bodies
+/// came apart with their excavations (until 2026-11-27), `T` against `L`'s seam was
+/// either no contact (farther than 1e-3 d_tol from the seam's line), and fell into `L`
+/// (its centroid 1.6 m down, inside `L`, after 1 s), or glue, bonded where it touched: on
+/// the unsettled pit wall of `tests/scenes/pit-wall.toml` a part the toe cut freed was
+/// glued by one corner to a part it fell on, swung about it to 60 rad/s, and stopped the
+/// run on energy created.
+#[test]
+fn a_body_split_by_an_excavation_comes_apart() {
+    let tan15 = 15f64.to_radians().tan();
+    let y = 1.0 + 2.0 * tan15;
+    let scene = format!(
+        r#"name = "split"
+[analysis]
+duration = 1.0
+time_step = 0.002
+max_displacement = 0.002
+normal_penalty = 1e10
+gravity = [0.0, -9.81]
+[materials.rock]
+density = 2500.0
+young = 1.0e10
+poisson = 0.25
+[materials.bedrock]
+density = 2500.0
+young = 1.0e10
+poisson = 0.25
+[joints.grip]
+friction_deg = 40.0
+between = ["rock", "bedrock"]
+[[blocks]]
+id = "base"
+material = "bedrock"
+fixed = true
+vertices = [[-1.0, -1.0], [3.0, -1.0], [3.0, 0.0], [-1.0, 0.0]]
+[[blocks]]
+id = "L"
+material = "rock"
+body = "rock"
+vertices = [[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [0.0, {y}]]
+[[blocks]]
+id = "M"
+material = "rock"
+body = "rock"
+removed_at = 0.01
+vertices = [[0.0, {y}], [2.0, 1.0], [2.0, 1.8], [0.0, 1.8]]
+[[blocks]]
+id = "T"
+material = "rock"
+body = "rock"
+vertices = [[0.8, 1.8], [1.3, 1.8], [1.3, 2.1], [0.8, 2.1]]
+"#
+    );
+    for detector in ["cover", "type-1", "type-2"] {
+        let (mut scene, _) = Scene::parse(&scene, Format::Toml, "split.toml").unwrap();
+        scene.analysis.detector = detector.to_string();
+        let model = scene.validate().unwrap();
+        let d_tol = model.params.d_tol;
+        let (l, t) = (1, 3);
+        let start = model.blocks[t].polygon.centroid();
+        let mut sim = Simulation::new(model, RunOptions::default());
+        while !sim.finished() {
+            sim.step().unwrap();
+            // How deep T's deepest vertex is inside L: the least of its depths behind L's
+            // edges' lines (negative: outside L).
+            let lp = &sim.blocks()[l].polygon;
+            for &v in sim.blocks()[t].polygon.vertices() {
+                let depth = lp
+                    .edges()
+                    .map(|(a, c)| (c - a).perp_dot(v - a) / a.distance(c))
+                    .fold(f64::INFINITY, f64::min);
+                assert!(
+                    depth <= d_tol,
+                    "{detector}: t = {}: a vertex of T {depth} m deep in L",
+                    sim.time()
+                );
+            }
+        }
+        let moved = sim.blocks()[t].polygon.centroid() - start;
+        assert!(
+            moved.x > 0.2,
+            "{detector}: T moved {moved:?}, not down L's slope"
+        );
+    }
+}
+
 /// Goodman and Bray's limit equilibrium of columns on a stepped base (Goodman and Bray
 /// 1976; Hoek and Bray, "Rock Slope Engineering", the toppling chapter), computed here
 /// from the columns alone: in the frame of the treads (x up the treads, which dip

@@ -303,6 +303,7 @@ impl Simulation {
     pub(crate) fn joint(&self, k: usize) -> JointProps {
         joint_of(
             &self.model,
+            &self.bodies,
             &self.material,
             &self.state.contacts.contacts[k],
         )
@@ -636,16 +637,23 @@ impl Simulation {
     }
 }
 
-/// The joint of contact `c` in `model` (`material`: each block's material index): none
+/// The joint of contact `c` in `model` (`bodies`: each block's body as the parts that
+/// remain hold together, `Model::bodies`; `material`: each block's material index): none
 /// (no friction, cohesion or tension) for a vertex-vertex contact, which carries a normal
 /// spring only (`Contact::vertex_vertex`); else the glue between parts of one body, the
 /// joint its edge names, or that of its blocks' materials (`Model::joint_of_contact`).
-pub(crate) fn joint_of(model: &Model, material: &[u32], c: &Contact) -> JointProps {
+pub(crate) fn joint_of(
+    model: &Model,
+    bodies: &[Option<u32>],
+    material: &[u32],
+    c: &Contact,
+) -> JointProps {
     if c.vertex_vertex {
         return JointProps::default();
     }
     if model.joints_by_edge {
         return *model.joint_of_contact(
+            bodies,
             c.key.vertex_block as usize,
             c.key.edge_block as usize,
             c.key.edge as usize,

@@ -329,6 +329,7 @@ impl Simulation {
         #[cfg(feature = "rayon")]
         let threads = self.threads();
         let (model, material, sc) = (&self.model, &self.material, &mut self.scratch);
+        let bodies = &self.bodies;
         let (rows, shapes, half, d) = (&sc.rows, &sc.shapes, &sc.half, &sc.d);
         let (sheared, scale, motions) = (&sc.sheared, &sc.force_scale, &sc.motions);
         let sin_e = self.detection.sin_theta_e();
@@ -352,7 +353,7 @@ impl Simulation {
                         // docs).
                         band: decision_band(scale, key),
                     };
-                    let joint = joint_of(model, material, &c);
+                    let joint = joint_of(model, bodies, material, &c);
                     let decide_at = |trial: Trial| {
                         decide(
                             &c,

@@ -343,6 +343,7 @@ impl Scene {
             blocks.push(block);
         }
         glue_seams(&mut blocks, self);
+        let seams = body_seams(&blocks, params.d_tol);
         let ground = self.ground_motion(&params, &mut blocks)?;
         let drift = ground.as_ref().and_then(|g| {
             let (end, peak) = g.end_and_peak_velocity();
@@ -380,6 +381,25 @@ impl Scene {
         let mut warnings = unit_slips(self);
         warnings.append(&mut unused);
         warnings.extend(drift);
+        let mut seamed = vec![false; blocks.len()];
+        for &[i, j] in &seams {
+            seamed[i as usize] = true;
+            seamed[j as usize] = true;
+        }
+        for (i, b) in blocks.iter().enumerate() {
+            if b.body.is_some() && !seamed[i] {
+                warnings.push(invalid(
+                    format!("blocks[{i}].body"),
+                    format!(
+                        "`{}` shares no seam with another part of body `{}` (no glued edge \
+                         runs along another part's edge): nothing joins it, and it moves as \
+                         a block on its own",
+                        b.id,
+                        self.blocks[i].body.as_deref().unwrap_or_default()
+                    ),
+                ));
+            }
+        }
         if params.integration == Integration::AverageAcceleration && params.impact_steps.is_none() {
             warnings.push(invalid(
                 "analysis.integration",
@@ -527,6 +547,7 @@ impl Scene {
             joint_of,
             joints_by_edge,
             blocks,
+            seams,
             warnings,
         })
     }
@@ -712,6 +733,40 @@ fn glue_seams(blocks: &mut [ModelBlock], scene: &Scene) {
             .collect();
         blocks[i].glued = glued;
     }
+}
+
+/// The seams that join the parts of bodies: the pairs `[i, j]`, `i < j`, of parts of one
+/// body where a glued edge of one runs along an edge of the other at the start (on one
+/// line and overlapping within the glue's own tolerance, `GLUE_SEAM` d_tol, or 1e-9 of
+/// the part's size if that is more), in order. Parts that touch only at a corner share no
+/// seam: no intact rock joins them.
+fn body_seams(blocks: &[ModelBlock], d_tol: f64) -> Vec<[u32; 2]> {
+    let mut parts: BTreeMap<u32, Vec<usize>> = BTreeMap::new();
+    for (i, b) in blocks.iter().enumerate() {
+        if let Some(body) = b.body {
+            parts.entry(body).or_default().push(i);
+        }
+    }
+    let joined = |i: usize, j: usize| {
+        let p = &blocks[i].polygon;
+        let eps = (1e-9 * p.diameter()).max(GLUE_SEAM * d_tol);
+        (0..p.len()).any(|k| {
+            blocks[i].glued.get(k) == Some(&true)
+                && !p.edge_contacts(k, &blocks[j].polygon, eps).is_empty()
+        })
+    };
+    let mut seams = Vec::new();
+    for list in parts.values() {
+        for (x, &i) in list.iter().enumerate() {
+            for &j in &list[x + 1..] {
+                if joined(i, j) || joined(j, i) {
+                    seams.push([i as u32, j as u32]);
+                }
+            }
+        }
+    }
+    seams.sort_unstable();
+    seams
 }
 
 /// Rejects blocks that overlap at the start by more than coordinates written by hand
@@ -1245,6 +1300,9 @@ pub struct Model {
     pub joint_of: Vec<u16>,
     /// Blocks in scene order.
     pub blocks: Vec<ModelBlock>,
+    /// The seams of intact rock that join the parts of bodies, pairs of block indices
+    /// `[i, j]` with `i < j` (see [`Model::bodies`]).
+    pub seams: Vec<[u32; 2]>,
     /// Whether some block names its edges' joints or is part of a body, so that a
     /// contact's joint depends on more than its blocks' materials.
     pub joints_by_edge: bool,
@@ -1265,17 +1323,55 @@ impl Model {
         self.joint_of_materials(self.blocks[a].material, self.blocks[b].material)
     }
 
-    /// The joint of a contact of a vertex of block `a` against edge `edge` of block `b`:
-    /// the glue, if the two are parts of one body and the edge is one of its seams; else
-    /// the joint the edge names; else that of the two materials.
-    pub fn joint_of_contact(&self, a: usize, b: usize, edge: usize) -> &JointProps {
-        let (ba, bb) = (&self.blocks[a], &self.blocks[b]);
-        if ba.body.is_some() && ba.body == bb.body && bb.glued.get(edge) == Some(&true) {
+    /// The bodies as the blocks not `removed` hold together: each block's body, the
+    /// smallest index of the parts joined to it by seams of intact rock ([`Model::seams`])
+    /// through parts that remain, or `None` for a block no seam joins to another that
+    /// remains. Before any removal these are the scene's bodies (their parts are joined by
+    /// their seams); an excavation that takes away the parts joining others splits a body
+    /// into the pieces left, and a part it leaves joined to none is a block on its own.
+    pub fn bodies(&self, removed: &[bool]) -> Vec<Option<u32>> {
+        let mut root: Vec<u32> = (0..self.blocks.len() as u32).collect();
+        fn find(root: &mut [u32], mut i: u32) -> u32 {
+            while root[i as usize] != i {
+                root[i as usize] = root[root[i as usize] as usize];
+                i = root[i as usize];
+            }
+            i
+        }
+        let mut joined = vec![false; self.blocks.len()];
+        for &[i, j] in &self.seams {
+            if removed[i as usize] || removed[j as usize] {
+                continue;
+            }
+            let (ri, rj) = (find(&mut root, i), find(&mut root, j));
+            // The smaller index is the root, so the label is the component's first part.
+            root[ri.max(rj) as usize] = ri.min(rj);
+            joined[i as usize] = true;
+            joined[j as usize] = true;
+        }
+        (0..self.blocks.len() as u32)
+            .map(|i| joined[i as usize].then(|| find(&mut root, i)))
+            .collect()
+    }
+
+    /// The joint of a contact of a vertex of block `a` against edge `edge` of block `b`,
+    /// `bodies` the blocks' bodies as they hold together ([`Model::bodies`]): the glue, if
+    /// the two are parts of one body and the edge is one of its seams; else the joint the
+    /// edge names; else that of the two materials.
+    pub fn joint_of_contact(
+        &self,
+        bodies: &[Option<u32>],
+        a: usize,
+        b: usize,
+        edge: usize,
+    ) -> &JointProps {
+        let bb = &self.blocks[b];
+        if bodies[a].is_some() && bodies[a] == bodies[b] && bb.glued.get(edge) == Some(&true) {
             return &JointProps::GLUED;
         }
         match bb.edge_joints.get(edge) {
             Some(Some(k)) => &self.joints[*k as usize],
-            _ => self.joint_of_materials(ba.material, bb.material),
+            _ => self.joint_of_materials(self.blocks[a].material, bb.material),
         }
     }
 

@@ -52,6 +52,9 @@ pub struct Simulation {
     /// its state frozen. A function of the time: the blocks whose `removed_at` is at
     /// or before it (`Simulation::remove_due`).
     pub(crate) removed: Vec<bool>,
+    /// Each block's body as the parts that remain hold together (`Model::bodies`): made
+    /// again when blocks are removed.
+    pub(crate) bodies: Vec<Option<u32>>,
     pub(crate) n_free: usize,
     /// Energy below the model's resolution, added to the guard's reference (see
     /// `guard`): every free block lowered by d_tol, and a spring over the start overlap.
@@ -294,6 +297,7 @@ impl Simulation {
         }
         let dt0 = p.dt0;
         let n_bolts = model.bolts.len();
+        let bodies = model.bodies(&vec![false; free.len()]);
         let mut sim = Simulation {
             nd: effects.dofs_per_block(),
             model,
@@ -306,6 +310,7 @@ impl Simulation {
                 .collect(),
             material,
             removed: vec![false; free.len()],
+            bodies,
             free,
             n_free: n_free as usize,
             energy_floor,
@@ -427,6 +432,7 @@ impl Simulation {
             self.removed[i] = true;
             self.state.blocks[i].velocity = [0.0; 6];
         }
+        self.bodies = self.model.bodies(&self.removed);
         let mut n = 0u32;
         for (i, f) in self.free.iter_mut().enumerate() {
             *f = if self.model.blocks[i].fixed || self.removed[i] {

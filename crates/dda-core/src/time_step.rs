@@ -132,7 +132,8 @@ impl Simulation {
     /// strike each other: their seams are intact rock, bonded, and their vibration
     /// against each other on those bonds is no impact (counted as one, it held a jointed
     /// slope with rock bridges at steps of 7.8e-6 s once its toe was cut). A part of a
-    /// body strikes with its body's mass, the parts' that remain: they move as one (a
+    /// body strikes with its body's mass, the parts' that remain joined to it
+    /// ([`Model::bodies`](crate::Model::bodies)): they move as one (a
     /// sliver part of 1.5e-5 m^2, left by an excavation's outline on a tonne of rock,
     /// held the step at 4.6e-7 s with its own).
     pub(crate) fn impact_room(&self) -> f64 {
@@ -140,15 +141,10 @@ impl Simulation {
         let Some(n_steps) = p.impact_steps else {
             return f64::INFINITY;
         };
-        let blocks = &self.model.blocks;
-        let bodies = blocks
-            .iter()
-            .filter_map(|b| b.body)
-            .max()
-            .map_or(0, |b| b as usize + 1);
-        let mut body_mass = vec![0.0; bodies];
-        for (i, b) in blocks.iter().enumerate() {
-            if let Some(body) = b.body
+        let bodies = &self.bodies;
+        let mut body_mass = vec![0.0; bodies.len()];
+        for (i, body) in bodies.iter().enumerate() {
+            if let Some(body) = *body
                 && self.free[i].is_some()
             {
                 body_mass[body as usize] += self.block_mass(i);
@@ -156,17 +152,15 @@ impl Simulation {
         }
         let mut room = f64::INFINITY;
         for pc in &self.state.contacts.pairs {
-            let (a, b) = (&blocks[pc.pair.a as usize], &blocks[pc.pair.b as usize]);
-            if a.body.is_some() && a.body == b.body {
+            let (a, b) = (bodies[pc.pair.a as usize], bodies[pc.pair.b as usize]);
+            if a.is_some() && a == b {
                 continue;
             }
             let Some((_, speed)) = self.impact_speed(pc.pair) else {
                 continue;
             };
             let Some(m) = self.reduced_mass(pc.pair, |i| {
-                blocks[i]
-                    .body
-                    .map_or_else(|| self.block_mass(i), |body| body_mass[body as usize])
+                bodies[i].map_or_else(|| self.block_mass(i), |body| body_mass[body as usize])
             }) else {
                 continue;
             };

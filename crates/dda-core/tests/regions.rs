@@ -335,3 +335,37 @@ fn bad_excavations_are_named_with_key_and_line() {
         "removed {removed} m^2 of a 2 x 2 m pit"
     );
 }
+
+/// A body is its parts joined by seams of intact rock, and comes apart where the parts
+/// that join them go: four unit squares of one body, `a`, `b` and `c` side by side and
+/// `d` touching `c` only at a corner. `a`, `b` and `c` make one body and `d` none (a
+/// corner is no seam); with `b` removed, `a` and `c` are blocks on their own.
+#[test]
+fn a_body_is_its_parts_joined_by_seams() {
+    let square = |id: &str, x: f64, y: f64| {
+        format!(
+            "[[blocks]]\nid = \"{id}\"\nmaterial = \"rock\"\nbody = \"rock\"\n\
+             vertices = [[{x}, {y}], [{}, {y}], [{}, {}], [{x}, {}]]\n",
+            x + 1.0,
+            x + 1.0,
+            y + 1.0,
+            y + 1.0
+        )
+    };
+    let text = format!(
+        "name = \"parts\"\n[analysis]\nduration = 0.1\ntime_step = 0.01\n\
+         max_displacement = 0.01\nnormal_penalty = 1e9\n\
+         [materials.rock]\ndensity = 2600.0\nyoung = 1e9\npoisson = 0.25\n{}{}{}{}",
+        square("a", 0.0, 0.0),
+        square("b", 1.0, 0.0),
+        square("c", 2.0, 0.0),
+        square("d", 3.0, 1.0)
+    );
+    let (_, model) = Scene::parse(&text, Format::Toml, "parts.toml").unwrap();
+    assert_eq!(model.seams, vec![[0, 1], [1, 2]]);
+    assert_eq!(
+        model.bodies(&[false; 4]),
+        vec![Some(0), Some(0), Some(0), None]
+    );
+    assert_eq!(model.bodies(&[false, true, false, false]), vec![None; 4]);
+}
