@@ -308,10 +308,11 @@ fn glued_seams_keep_their_springs_where_the_parts_meet_corner_to_corner() {
 }
 
 /// A body whose joining part is excavated comes apart: what the parts left share is no
-/// longer intact rock. Three glued parts, one above the other: `L` on a fixed base, its
-/// top sloping down at 15 degrees; `M` on it, with a level top; a small `T` on `M`. `M`
-/// is removed at 0.01 s, and `T` falls onto `L`'s slope, a seam of the body until then,
-/// with no joint of its own between the two (frictionless). It must land on it and slide
+/// longer intact rock. `tests/scenes/split-body.toml`: three glued parts, one above the
+/// other, `L` on a fixed base, its top sloping down at 15 degrees; `M` on it, with a
+/// level top; a small `T` on `M`. `M` is removed at 0.01 s, and `T` falls onto `L`'s
+/// slope, a seam of the body until then, with no joint of its own between the two
+/// (frictionless). It must land on it and slide
 /// down it with every detector, never sinking into `L` beyond d_tol: it falls some 0.5 m
 /// (0.33 s), and from rest on a frictionless 15-degree slope it would slide 0.5 g sin 15
 /// t^2 = 0.57 m in the 0.67 s left, 0.55 m across; a part glued where it lands would only
@@ -324,52 +325,9 @@ fn glued_seams_keep_their_springs_where_the_parts_meet_corner_to_corner() {
 /// run on energy created.
 #[test]
 fn a_body_split_by_an_excavation_comes_apart() {
-    let tan15 = 15f64.to_radians().tan();
-    let y = 1.0 + 2.0 * tan15;
-    let scene = format!(
-        r#"name = "split"
-[analysis]
-duration = 1.0
-time_step = 0.002
-max_displacement = 0.002
-normal_penalty = 1e10
-gravity = [0.0, -9.81]
-[materials.rock]
-density = 2500.0
-young = 1.0e10
-poisson = 0.25
-[materials.bedrock]
-density = 2500.0
-young = 1.0e10
-poisson = 0.25
-[joints.grip]
-friction_deg = 40.0
-between = ["rock", "bedrock"]
-[[blocks]]
-id = "base"
-material = "bedrock"
-fixed = true
-vertices = [[-1.0, -1.0], [3.0, -1.0], [3.0, 0.0], [-1.0, 0.0]]
-[[blocks]]
-id = "L"
-material = "rock"
-body = "rock"
-vertices = [[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [0.0, {y}]]
-[[blocks]]
-id = "M"
-material = "rock"
-body = "rock"
-removed_at = 0.01
-vertices = [[0.0, {y}], [2.0, 1.0], [2.0, 1.8], [0.0, 1.8]]
-[[blocks]]
-id = "T"
-material = "rock"
-body = "rock"
-vertices = [[0.8, 1.8], [1.3, 1.8], [1.3, 2.1], [0.8, 2.1]]
-"#
-    );
+    let text = include_str!("../scenes/split-body.toml");
     for detector in ["cover", "type-1", "type-2"] {
-        let (mut scene, _) = Scene::parse(&scene, Format::Toml, "split.toml").unwrap();
+        let (mut scene, _) = Scene::parse(text, Format::Toml, "split-body.toml").unwrap();
         scene.analysis.detector = detector.to_string();
         let model = scene.validate().unwrap();
         let d_tol = model.params.d_tol;

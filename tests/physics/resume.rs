@@ -16,12 +16,16 @@ const SLIDING_BLOCK: &str = concat!(
 /// after it.
 const EXCAVATION: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/excavation.toml");
 
+/// A body split by an excavation at its fifth step: resumed before it and after it.
+const SPLIT_BODY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/split-body.toml");
+
 /// A wall on a shaking ground (its record in a file beside it).
 const QUAKE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/quake.toml");
 
 fn scenes() -> Vec<Scene> {
     let mut v = vec![Scene::load(Path::new(SLIDING_BLOCK)).unwrap().0];
     v.push(Scene::load(Path::new(EXCAVATION)).unwrap().0);
+    v.push(Scene::load(Path::new(SPLIT_BODY)).unwrap().0);
     v.push(Scene::load(Path::new(QUAKE)).unwrap().0);
     // The average-acceleration rule carries each block's acceleration (impact_steps).
     let mut impacts = Scene::load(Path::new(QUAKE)).unwrap().0;
