@@ -29,6 +29,7 @@ impl Scene {
             let mut model = self.validate_blocks()?;
             model.warnings.extend(self.stress_of_rigid_blocks(&model));
             model.warnings.extend(self.slivers_written(&model));
+            model.warnings.extend(self.parts_unjoined(&model));
             return Ok((Cow::Borrowed(self), model));
         }
         let (scene, dropped) = crate::regions::expand(self)?;
@@ -65,7 +66,47 @@ impl Scene {
         }
         model.warnings.extend(self.stress_of_rigid_blocks(&model));
         model.warnings.extend(self.slivers_written(&model));
+        model.warnings.extend(self.parts_unjoined(&model));
         Ok((Cow::Owned(scene), model))
+    }
+
+    /// A warning for each part of a body the scene writes that shares no seam with
+    /// another part of its body ([`Model::seams`]): nothing joins it, and it moves as a
+    /// block of its own (a glued edge that misses its neighbour's, or a `body` given to a
+    /// block apart from the others, most likely). The parts regions and excavations cut
+    /// are not written, and are not warned of (an excavation can leave one part of a
+    /// block, its others inside the outline or dropped as slivers).
+    fn parts_unjoined(&self, model: &Model) -> Vec<Invalid> {
+        let mut seamed = vec![false; model.blocks.len()];
+        for &[i, j] in &model.seams {
+            seamed[i as usize] = true;
+            seamed[j as usize] = true;
+        }
+        let index: BTreeMap<&str, usize> = model
+            .blocks
+            .iter()
+            .enumerate()
+            .map(|(k, m)| (m.id.as_str(), k))
+            .collect();
+        self.blocks
+            .iter()
+            .enumerate()
+            .filter_map(|(i, b)| {
+                let body = b.body.as_deref()?;
+                let k = *index.get(b.id.as_str())?;
+                (!seamed[k]).then(|| {
+                    invalid(
+                        format!("blocks[{i}].body"),
+                        format!(
+                            "`{}` shares no seam with another part of body `{body}` (no glued \
+                             edge runs along another part's edge): nothing joins it, and it \
+                             moves as a block on its own",
+                            b.id
+                        ),
+                    )
+                })
+            })
+            .collect()
     }
 
     /// A warning where the scene writes a free block smaller than d_tol^2 wedged among
@@ -381,25 +422,6 @@ impl Scene {
         let mut warnings = unit_slips(self);
         warnings.append(&mut unused);
         warnings.extend(drift);
-        let mut seamed = vec![false; blocks.len()];
-        for &[i, j] in &seams {
-            seamed[i as usize] = true;
-            seamed[j as usize] = true;
-        }
-        for (i, b) in blocks.iter().enumerate() {
-            if b.body.is_some() && !seamed[i] {
-                warnings.push(invalid(
-                    format!("blocks[{i}].body"),
-                    format!(
-                        "`{}` shares no seam with another part of body `{}` (no glued edge \
-                         runs along another part's edge): nothing joins it, and it moves as \
-                         a block on its own",
-                        b.id,
-                        self.blocks[i].body.as_deref().unwrap_or_default()
-                    ),
-                ));
-            }
-        }
         if params.integration == Integration::AverageAcceleration && params.impact_steps.is_none() {
             warnings.push(invalid(
                 "analysis.integration",

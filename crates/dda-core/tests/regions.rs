@@ -339,7 +339,8 @@ fn bad_excavations_are_named_with_key_and_line() {
 /// A body is its parts joined by seams of intact rock, and comes apart where the parts
 /// that join them go: four unit squares of one body, `a`, `b` and `c` side by side and
 /// `d` touching `c` only at a corner. `a`, `b` and `c` make one body and `d` none (a
-/// corner is no seam); with `b` removed, `a` and `c` are blocks on their own.
+/// corner is no seam), with a warning naming it; with `b` removed, `a` and `c` are
+/// blocks on their own.
 #[test]
 fn a_body_is_its_parts_joined_by_seams() {
     let square = |id: &str, x: f64, y: f64| {
@@ -368,4 +369,42 @@ fn a_body_is_its_parts_joined_by_seams() {
         vec![Some(0), Some(0), Some(0), None]
     );
     assert_eq!(model.bodies(&[false, true, false, false]), vec![None; 4]);
+    // The scene is told of `d`, and of nothing else of its bodies.
+    let told: Vec<&str> = model
+        .warnings
+        .iter()
+        .filter(|w| w.message.contains("shares no seam"))
+        .map(|w| w.key.as_str())
+        .collect();
+    assert_eq!(told, ["blocks[3].body"]);
+    // The parts an excavation makes are not the scene's to mend: one that cuts a region's
+    // block 2e-6 m from its side leaves the part inside, the body's only one, the strip
+    // outside dropped as a sliver.
+    let text = String::from(
+        "name = \"one part\"\n[analysis]\nduration = 0.1\ntime_step = 0.002\n\
+         max_displacement = 0.002\nnormal_penalty = 1e9\ngravity = [0.0, -9.81]\n\
+         [materials.rock]\ndensity = 2600.0\nyoung = 1e9\npoisson = 0.25\n\
+         [[blocks]]\nid = \"keep\"\nmaterial = \"rock\"\n\
+         vertices = [[5.0, 0.0], [6.0, 0.0], [6.0, 1.0], [5.0, 1.0]]\n\
+         [[regions]]\nid = \"m\"\nmaterial = \"rock\"\n\
+         vertices = [[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 4.0]]\n\
+         [[excavations]]\nid = \"cut\"\nat = 0.05\n\
+         vertices = [[0.000002, -0.5], [4.5, -0.5], [4.5, 4.5], [0.000002, 4.5]]\n",
+    );
+    let (_, model) = Scene::parse(&text, Format::Toml, "one-part.toml").unwrap();
+    let parts: Vec<_> = model.blocks.iter().filter(|b| b.body.is_some()).collect();
+    assert_eq!(
+        parts.len(),
+        1,
+        "{:?}",
+        parts.iter().map(|b| &b.id).collect::<Vec<_>>()
+    );
+    assert!(
+        model
+            .warnings
+            .iter()
+            .all(|w| !w.message.contains("shares no seam")),
+        "{:?}",
+        model.warnings
+    );
 }
