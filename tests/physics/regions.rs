@@ -269,6 +269,60 @@ fn the_parts_of_a_non_convex_block_move_as_one() {
     );
 }
 
+/// A non-convex block written by hand as convex parts of one `body`, to 6 decimals: the
+/// post and arm above as two blocks, the whole scene turned 61 degrees (its gravity
+/// too), so that the parts' shared faces differ in the last digit. The parts find their
+/// seam within what hand-written faces may differ by (2e-6 m) and hold as one, their
+/// glue reaching as far: the arm's tip drops by less than 1 mm along the gravity in
+/// 0.5 s, as the region's does, also where d_tol is small. With
+/// the seam looked for within 1e-9 of the parts' size (until 2026-11-27) the parts had
+/// none, and the arm fell.
+#[test]
+fn a_body_written_to_six_decimals_finds_its_seams() {
+    let (sin, cos) = 61f64.to_radians().sin_cos();
+    let turn = |x: f64, y: f64| DVec2::new(x * cos - y * sin, x * sin + y * cos);
+    let outline = |points: &[(f64, f64)]| {
+        let v: Vec<String> = points
+            .iter()
+            .map(|&(x, y)| {
+                let p = turn(x, y);
+                format!("[{:.6}, {:.6}]", p.x, p.y)
+            })
+            .collect();
+        v.join(", ")
+    };
+    let g = turn(0.0, -9.81);
+    // d_max 5 mm, and 0.1 mm, whose 1e-3 d_tol (2e-7 m) is below what the faces differ by
+    // (7.5e-7 m from the arm's lower corner to the post's face).
+    for d_max in [0.005, 0.0001] {
+        let text = format!(
+            "name = \"post and arm by hand\"\n[analysis]\nduration = 0.5\ntime_step = 0.002\n\
+             max_displacement = {d_max}\nnormal_penalty = 1e10\ngravity = [{}, {}]\n\
+             [materials.rock]\ndensity = 2600.0\nyoung = 5e9\npoisson = 0.25\n\
+             [joints.default]\nfriction_deg = 30.0\n\
+             [[blocks]]\nid = \"ground\"\nmaterial = \"rock\"\nfixed = true\nvertices = [{}]\n\
+             [[blocks]]\nid = \"post\"\nmaterial = \"rock\"\nbody = \"L\"\nvertices = [{}]\n\
+             [[blocks]]\nid = \"arm\"\nmaterial = \"rock\"\nbody = \"L\"\nvertices = [{}]\n",
+            g.x,
+            g.y,
+            outline(&[(-2.0, -1.0), (6.0, -1.0), (6.0, 0.0), (-2.0, 0.0)]),
+            outline(&[(0.0, 0.0), (2.0, 0.0), (2.0, 3.0), (0.0, 3.0)]),
+            outline(&[(2.0, 2.0), (4.0, 2.0), (4.0, 3.0), (2.0, 3.0)]),
+        );
+        let (_, model) = Scene::parse(&text, Format::Toml, "post.toml").unwrap();
+        assert_eq!(model.seams, vec![[1, 2]], "d_max {d_max}");
+        let tip = model.blocks[2].polygon.vertices()[2];
+        let mut sim = Simulation::new(model, RunOptions::default());
+        sim.run(|_, _| {}).unwrap();
+        let down = g / g.length();
+        let drop = (sim.blocks()[2].polygon.vertices()[2] - tip).dot(down);
+        assert!(
+            drop.abs() < 1e-3,
+            "d_max {d_max}: the arm's tip dropped {drop} m"
+        );
+    }
+}
+
 /// The glue of non-convex blocks' parts holds their seams to the ends, where parts
 /// meet corner to corner: in `tests/scenes/rock-mass.toml` (a jointed mass whose
 /// non-convex pieces are glued parts) every seam contact bonded at the first step is

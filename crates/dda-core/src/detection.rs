@@ -21,6 +21,14 @@ pub(crate) const NEIGHBOUR_SKIN: f64 = 2.0;
 /// features comes this close without touching.
 pub(crate) const GLUE_SEAM: f64 = 1e-3;
 
+/// How far from the line of a seam edge of another part of its body a vertex may be for
+/// their contact to be glue, m: [`GLUE_SEAM`] d_tol, or as far as faces written by hand
+/// to 6 decimals may differ (`limits::START_OVERLAP`) where that is more, so that a body
+/// written by hand holds where it finds its seams (`Model::seams`).
+pub(crate) fn glue_reach(d_tol: f64) -> f64 {
+    (GLUE_SEAM * d_tol).max(crate::limits::START_OVERLAP)
+}
+
 impl Simulation {
     /// Step-start detection with states inherited from the previous step, then the
     /// engine's normalisation: closed contacts of frictionless joints slide (no shear
@@ -87,12 +95,12 @@ impl Simulation {
             let j = self.joint(k);
             if glue && j.glued && (c.active || c.bonded && self.at_seam_end(&c)) {
                 // Parts of one body: a contact on the seam (its vertex on the edge's line,
-                // within GLUE_SEAM of d_tol) is locked and bonded where it is, unloaded,
+                // within `glue_reach`) is locked and bonded where it is, unloaded,
                 // for good; any other contact between them (a vertex across a sliver
                 // part) is no contact at all. A seam's end, where the parts' corners
                 // meet, stays bonded when its vertex passes the edge's end by rounding
                 // or strain, where the detector no longer lists it active.
-                let seam = GLUE_SEAM * self.detection.d_tol;
+                let seam = glue_reach(self.detection.d_tol);
                 let c = &mut self.state.contacts.contacts[k];
                 c.active = true;
                 if c.bonded || c.d_n.abs() <= seam {

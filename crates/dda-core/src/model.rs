@@ -2,7 +2,7 @@
 //! range (`limits`), names resolved to indices, polygons built, the start checked
 //! (no overlaps; in a static analysis, every free block supported).
 
-use crate::detection::GLUE_SEAM;
+use crate::detection::{GLUE_SEAM, glue_reach};
 use crate::limits::{self, Range};
 use crate::scene::{
     Analysis, BlockSpec, Integration, Invalid, Joint, Material, Mode, Plane, Scene, SolverChoice,
@@ -383,7 +383,7 @@ impl Scene {
             }
             blocks.push(block);
         }
-        glue_seams(&mut blocks, self);
+        glue_seams(&mut blocks, self, params.d_tol);
         let seams = body_seams(&blocks, params.d_tol);
         let ground = self.ground_motion(&params, &mut blocks)?;
         let drift = ground.as_ref().and_then(|g| {
@@ -733,23 +733,33 @@ fn point_in(key: &str, at: [f64; 2], blocks: &[ModelBlock]) -> Result<(usize, DV
         })
 }
 
+/// How far from one line two parts' edges may lie and still make a seam, m: the glue's
+/// reach (`glue_reach`: 1e-3 d_tol, or 2e-6 m, what faces written by hand to 6 decimals
+/// may differ by, where that is more), or as far as the two may overlap at the start
+/// (`start_overlap`) if that is more.
+fn seam_reach(a: &ConvexPolygon, b: &ConvexPolygon, d_tol: f64) -> f64 {
+    start_overlap(a, b).max(glue_reach(d_tol))
+}
+
 /// The seams of the parts of bodies whose scene gives no `glued_edges`: every edge that
 /// runs along an edge of another part of its body (anti-parallel, on one line within
-/// 1e-9 of the part's size, overlapping by more than that).
-fn glue_seams(blocks: &mut [ModelBlock], scene: &Scene) {
+/// [`seam_reach`], overlapping by more than that). Before 2026-11-27 the line was 1e-9
+/// of the part's size, and an L-shaped body written by hand as two parts to 6 decimals,
+/// turned 30 degrees, had no seam: its parts came apart.
+fn glue_seams(blocks: &mut [ModelBlock], scene: &Scene, d_tol: f64) {
     let n = blocks.len();
     for i in 0..n {
         if blocks[i].body.is_none() || scene.blocks[i].glued_edges.is_some() {
             continue;
         }
         let p = &blocks[i].polygon;
-        let eps = 1e-9 * p.diameter();
         let glued: Vec<bool> = (0..p.len())
             .map(|k| {
                 (0..n).any(|j| {
+                    let q = &blocks[j].polygon;
                     j != i
                         && blocks[j].body == blocks[i].body
-                        && !p.edge_contacts(k, &blocks[j].polygon, eps).is_empty()
+                        && !p.edge_contacts(k, q, seam_reach(p, q, d_tol)).is_empty()
                 })
             })
             .collect();
@@ -759,8 +769,7 @@ fn glue_seams(blocks: &mut [ModelBlock], scene: &Scene) {
 
 /// The seams that join the parts of bodies: the pairs `[i, j]`, `i < j`, of parts of one
 /// body where a glued edge of one runs along an edge of the other at the start (on one
-/// line and overlapping within the glue's own tolerance, `GLUE_SEAM` d_tol, or 1e-9 of
-/// the part's size if that is more), in order. Parts that touch only at a corner share no
+/// line and overlapping within [`seam_reach`]), in order. Parts that touch only at a corner share no
 /// seam: no intact rock joins them.
 fn body_seams(blocks: &[ModelBlock], d_tol: f64) -> Vec<[u32; 2]> {
     let mut parts: BTreeMap<u32, Vec<usize>> = BTreeMap::new();
@@ -770,11 +779,10 @@ fn body_seams(blocks: &[ModelBlock], d_tol: f64) -> Vec<[u32; 2]> {
         }
     }
     let joined = |i: usize, j: usize| {
-        let p = &blocks[i].polygon;
-        let eps = (1e-9 * p.diameter()).max(GLUE_SEAM * d_tol);
+        let (p, q) = (&blocks[i].polygon, &blocks[j].polygon);
+        let eps = seam_reach(p, q, d_tol);
         (0..p.len()).any(|k| {
-            blocks[i].glued.get(k) == Some(&true)
-                && !p.edge_contacts(k, &blocks[j].polygon, eps).is_empty()
+            blocks[i].glued.get(k) == Some(&true) && !p.edge_contacts(k, q, eps).is_empty()
         })
     };
     let mut seams = Vec::new();
