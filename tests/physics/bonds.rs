@@ -10,6 +10,7 @@
 #![allow(clippy::unwrap_used)]
 
 use dda::core::{Format, RunOptions, Scene, Simulation};
+use dda::geom::DVec2;
 
 const P: f64 = 1e10;
 const DENSITY: f64 = 2600.0;
@@ -191,4 +192,63 @@ fn a_bond_holds_over_the_faces_overlap_not_over_the_longer_face() {
     assert!(held.abs() < 1e-4, "gx 5: moved {held} m");
     let gone = slid(10.0);
     assert!(gone > 0.1, "gx 10: moved {gone} m");
+}
+
+/// A bond written by hand holds: the block of
+/// `a_block_hangs_from_its_bond_while_the_bond_is_stronger_than_its_weight` (a strength
+/// of 2 W per metre) under a wider roof, the scene turned 58.7 degrees (its gravity too)
+/// and written to 6 decimals, so that one of the block's top corners lies 6.9e-7 m below
+/// the roof's face and the other as far into it. Blocks written so touch (the scene
+/// format accepts faces that differ by 2e-6 m), and start bonded: the block stays, its
+/// drop along the gravity within 2 W / p, also at d_max 0.1 mm, where 1e-3 d_tol is
+/// 2e-7 m. With the bond formed only within 1e-3 d_tol (until 2026-11-27), that corner
+/// started unbonded at d_max 0.1 mm, and the block fell 0.36 m in 0.3 s unsettled, and
+/// stopped the run on energy created settled.
+#[test]
+fn a_bond_written_by_hand_holds() {
+    let (sin, cos) = 58.7f64.to_radians().sin_cos();
+    let turn = |x: f64, y: f64| DVec2::new(x * cos - y * sin, x * sin + y * cos);
+    let outline = |points: &[(f64, f64)]| {
+        let v: Vec<String> = points
+            .iter()
+            .map(|&(x, y)| {
+                let p = turn(x, y);
+                format!("[{:.6}, {:.6}]", p.x, p.y)
+            })
+            .collect();
+        format!("[{}]", v.join(", "))
+    };
+    let w = DENSITY * G;
+    let g = turn(0.0, -G);
+    let roof = outline(&[(-2.0, 0.0), (2.0, 0.0), (2.0, 1.0), (-2.0, 1.0)]);
+    let block = outline(&[(-0.5, -1.0), (0.5, -1.0), (0.5, 0.0), (-0.5, 0.0)]);
+    for settle in [false, true] {
+        for d_max in ["0.005", "0.0001"] {
+            let text = scene(&roof, &block, 2.0 * w, settle, 0.3)
+                .replace(
+                    "max_displacement = 0.005",
+                    &format!("max_displacement = {d_max}"),
+                )
+                .replace(
+                    &format!("gravity = [0.0, -{G}]"),
+                    &format!("gravity = [{}, {}]", g.x, g.y),
+                );
+            let (_, model) = Scene::parse(&text, Format::Toml, "bond.toml").unwrap();
+            assert_eq!(model.params.gravity, Some(g));
+            let start: Vec<_> = model.blocks[1].polygon.vertices().to_vec();
+            let mut sim = Simulation::new(model, RunOptions::default());
+            let down = g / G;
+            let mut drop = 0.0f64;
+            sim.run(|s, _| {
+                for (a, b) in start.iter().zip(s.blocks()[1].polygon.vertices()) {
+                    drop = drop.max((*b - *a).dot(down));
+                }
+            })
+            .unwrap();
+            assert!(
+                drop <= 2.0 * w / P,
+                "settle {settle}, d_max {d_max}: dropped {drop} m"
+            );
+        }
+    }
 }

@@ -22,9 +22,11 @@ pub(crate) const NEIGHBOUR_SKIN: f64 = 2.0;
 pub(crate) const GLUE_SEAM: f64 = 1e-3;
 
 /// How far from the line of a seam edge of another part of its body a vertex may be for
-/// their contact to be glue, m: [`GLUE_SEAM`] d_tol, or as far as faces written by hand
-/// to 6 decimals may differ (`limits::START_OVERLAP`) where that is more, so that a body
-/// written by hand holds where it finds its seams (`Model::seams`).
+/// their contact to be glue, and from the line of an edge of another block for blocks
+/// written touching to start bonded by a joint with cohesion or tensile strength, m:
+/// [`GLUE_SEAM`] d_tol, or as far as faces written by hand to 6 decimals may differ
+/// (`limits::START_OVERLAP`) where that is more, so that a body written by hand holds
+/// where it finds its seams (`Model::seams`), and a bond written by hand holds.
 pub(crate) fn glue_reach(d_tol: f64) -> f64 {
     (GLUE_SEAM * d_tol).max(crate::limits::START_OVERLAP)
 }
@@ -67,7 +69,7 @@ impl Simulation {
         // static step, or the run's first step where nothing settled them. Contacts of
         // bonding joints that touch then start bonded.
         let bond_touching = first && self.settling.is_none();
-        let touch = GLUE_SEAM * self.detection.d_tol;
+        let touch = glue_reach(self.detection.d_tol);
         let open_band = self.open_band();
         for k in 0..self.state.contacts.contacts.len() {
             let mut c = self.state.contacts.contacts[k];
@@ -116,7 +118,7 @@ impl Simulation {
                 continue;
             }
             // A contact of a bonding joint whose blocks touch at the start (its vertex on
-            // the edge's line within GLUE_SEAM of d_tol, or past it) is bonded and locked
+            // the edge's line within `glue_reach`, or past it) is bonded and locked
             // where it is, unloaded: the rock holds across it until its tensile strength
             // or its cohesion and friction give way. A corner against a corner of the
             // type-based detectors has no contact length, and so no bond.

@@ -2,7 +2,7 @@
 //! range (`limits`), names resolved to indices, polygons built, the start checked
 //! (no overlaps; in a static analysis, every free block supported).
 
-use crate::detection::{GLUE_SEAM, glue_reach};
+use crate::detection::glue_reach;
 use crate::limits::{self, Range};
 use crate::scene::{
     Analysis, BlockSpec, Integration, Invalid, Joint, Material, Mode, Plane, Scene, SolverChoice,
@@ -110,15 +110,15 @@ impl Scene {
     }
 
     /// A warning where the scene writes a free block smaller than d_tol^2 wedged among
-    /// others (touching another as written, within 1e-3 d_tol, `GLUE_SEAM`; not a part
-    /// of a body, whose seams glue it): contact detection at d_tol does not resolve it, and such a sliver
+    /// others (touching another as written, within `glue_reach`; not a part of a body,
+    /// whose seams glue it): contact detection at d_tol does not resolve it, and such a sliver
     /// between stiffer blocks can spin up numerically and hold every step
     /// (docs/method.md section 10, where a region drops such pieces by default). A small
     /// block thrown at others (the paper's hard cases) is not warned of. Names the
     /// first, with how many more there are.
     fn slivers_written(&self, model: &Model) -> Option<Invalid> {
         let d_tol = model.params.d_tol;
-        let touch = GLUE_SEAM * d_tol;
+        let touch = glue_reach(d_tol);
         let index: BTreeMap<&str, usize> = model
             .blocks
             .iter()
@@ -769,8 +769,8 @@ fn glue_seams(blocks: &mut [ModelBlock], scene: &Scene, d_tol: f64) {
 
 /// The seams that join the parts of bodies: the pairs `[i, j]`, `i < j`, of parts of one
 /// body where a glued edge of one runs along an edge of the other at the start (on one
-/// line and overlapping within [`seam_reach`]), in order. Parts that touch only at a corner share no
-/// seam: no intact rock joins them.
+/// line and overlapping within [`seam_reach`]), in order. Parts that touch only at a
+/// corner share no seam: no intact rock joins them.
 fn body_seams(blocks: &[ModelBlock], d_tol: f64) -> Vec<[u32; 2]> {
     let mut parts: BTreeMap<u32, Vec<usize>> = BTreeMap::new();
     for (i, b) in blocks.iter().enumerate() {
@@ -1353,12 +1353,13 @@ impl Model {
         self.joint_of_materials(self.blocks[a].material, self.blocks[b].material)
     }
 
-    /// The bodies as the blocks not `removed` hold together: each block's body, the
-    /// smallest index of the parts joined to it by seams of intact rock ([`Model::seams`])
-    /// through parts that remain, or `None` for a block no seam joins to another that
-    /// remains. Before any removal these are the scene's bodies (their parts are joined by
-    /// their seams); an excavation that takes away the parts joining others splits a body
-    /// into the pieces left, and a part it leaves joined to none is a block on its own.
+    /// The bodies as the blocks not `removed` (a flag for each block, in scene order) hold
+    /// together: each block's body, the smallest index of the parts joined to it by seams
+    /// of intact rock ([`Model::seams`]) through parts that remain, or `None` for a block
+    /// no seam joins to another that remains. Before any removal these are the scene's
+    /// bodies (their parts are joined by their seams); an excavation that takes away the
+    /// parts joining others splits a body into the pieces left, and a part it leaves
+    /// joined to none is a block on its own.
     pub fn bodies(&self, removed: &[bool]) -> Vec<Option<u32>> {
         let mut root: Vec<u32> = (0..self.blocks.len() as u32).collect();
         fn find(root: &mut [u32], mut i: u32) -> u32 {
