@@ -394,3 +394,49 @@ stiffness = 1e10
         );
     }
 }
+
+/// A point written on a face finds the block of that face: a bolt from the bottom face
+/// of a block hung under a roof to the roof's top face, and a measured point on the
+/// block's side face, the scene turned 58.7 degrees and written to 6 decimals, so that
+/// each point lies up to 7e-7 m off its face, outside the rock as often as in it. Each
+/// is attached to the block whose face it is on; a point in the rock goes to the block
+/// holding it, even where another is within 2e-6 m (a point written 1.5e-6 m into the
+/// block from the roof's face lies 1.2e-6 m inside it and 1.4e-6 m outside the roof,
+/// which comes first). Until 2026-11-27 a point had to lie
+/// within 1e-9 of a block's size of it, and all three were refused as lying in no block.
+#[test]
+fn a_point_written_on_a_face_finds_its_block() {
+    let (sin, cos) = 58.7f64.to_radians().sin_cos();
+    let turn = |x: f64, y: f64| {
+        let p = DVec2::new(x * cos - y * sin, x * sin + y * cos);
+        format!("[{:.6}, {:.6}]", p.x, p.y)
+    };
+    let outline = |points: &[(f64, f64)]| {
+        let v: Vec<String> = points.iter().map(|&(x, y)| turn(x, y)).collect();
+        format!("[{}]", v.join(", "))
+    };
+    let text = format!(
+        "name = \"on faces\"\n[analysis]\nduration = 0.01\ntime_step = 0.002\n\
+         max_displacement = 0.001\nnormal_penalty = 1e10\n\
+         [materials.rock]\ndensity = 2600.0\nyoung = 1e10\npoisson = 0.25\n\
+         [[blocks]]\nid = \"roof\"\nmaterial = \"rock\"\nfixed = true\nvertices = {}\n\
+         [[blocks]]\nid = \"key\"\nmaterial = \"rock\"\nvertices = {}\n\
+         [[bolts]]\nfrom = {}\nto = {}\nstiffness = 1e8\n\
+         [[measure]]\nid = \"side\"\nat = {}\n\
+         [[measure]]\nid = \"in the key\"\nat = {}\n",
+        outline(&[(-2.0, 0.0), (2.0, 0.0), (2.0, 1.0), (-2.0, 1.0)]),
+        outline(&[(-0.5, -1.0), (0.5, -1.0), (0.5, 0.0), (-0.5, 0.0)]),
+        turn(0.3, -1.0),
+        turn(0.3, 1.0),
+        turn(0.5, -0.37),
+        turn(0.2, -0.0000015),
+    );
+    let (_, model) = Scene::parse(&text, Format::Toml, "faces.toml").unwrap();
+    let (roof, key) = (0, 1);
+    assert_eq!(
+        (model.bolts[0].from_block, model.bolts[0].to_block),
+        (key, roof)
+    );
+    assert_eq!(model.measures[0].block, key);
+    assert_eq!(model.measures[1].block, key);
+}

@@ -714,13 +714,23 @@ pub(crate) fn no_material(key: &str, name: &str, scene: &Scene) -> Invalid {
 }
 
 /// The block holding `at` (key `key`): the first, in scene order, whose outline contains
-/// it (its boundary included, to 1e-9 of its size), and the point.
+/// it (its boundary included, to 1e-9 of its size), else the first it lies within 2e-6 m
+/// of (`limits::START_OVERLAP`: a point written to 6 decimals on a face that is not
+/// level or upright lies up to 7e-7 m off it, outside the rock as often as in it), and
+/// the point.
 fn point_in(key: &str, at: [f64; 2], blocks: &[ModelBlock]) -> Result<(usize, DVec2), Invalid> {
     each_within(key, &at, &limits::COORDINATE)?;
     let p = DVec2::from(at);
+    let within = |reach: f64| {
+        move |b: &ModelBlock| {
+            let size = 1e-9 * b.polygon.diameter();
+            b.polygon.contains_within(p, size.max(reach))
+        }
+    };
     blocks
         .iter()
-        .position(|b| b.polygon.contains_within(p, 1e-9 * b.polygon.diameter()))
+        .position(within(0.0))
+        .or_else(|| blocks.iter().position(within(limits::START_OVERLAP)))
         .map(|i| (i, p))
         .ok_or_else(|| {
             invalid(

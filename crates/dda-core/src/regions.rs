@@ -565,7 +565,10 @@ fn excavate(
         let sliver: Vec<bool> = (cut.pieces.iter())
             .flat_map(|piece| piece.parts.iter().map(move |part| (piece, part)))
             .map(|(piece, part)| {
-                let holds = |q: [f64; 2]| part.contains_within(DVec2::from(q), eps);
+                // Within what a point written to 6 decimals may miss a face by, as a
+                // bolt's end or a measured point finds its block (`model::point_in`).
+                let reach = eps.max(limits::START_OVERLAP);
+                let holds = |q: [f64; 2]| part.contains_within(DVec2::from(q), reach);
                 part.area() < sliver_area
                     && !inside(piece)
                     && !b.loads.iter().any(|l| holds(l.at))
