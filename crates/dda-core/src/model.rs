@@ -30,6 +30,7 @@ impl Scene {
             model.warnings.extend(self.stress_of_rigid_blocks(&model));
             model.warnings.extend(self.slivers_written(&model));
             model.warnings.extend(self.parts_unjoined(&model));
+            model.warnings.extend(self.points_outside());
             return Ok((Cow::Borrowed(self), model));
         }
         let (scene, dropped) = crate::regions::expand(self)?;
@@ -67,6 +68,7 @@ impl Scene {
         model.warnings.extend(self.stress_of_rigid_blocks(&model));
         model.warnings.extend(self.slivers_written(&model));
         model.warnings.extend(self.parts_unjoined(&model));
+        model.warnings.extend(self.points_outside());
         Ok((Cow::Owned(scene), model))
     }
 
@@ -107,6 +109,45 @@ impl Scene {
                 })
             })
             .collect()
+    }
+
+    /// A warning for each load or fixed point the scene writes outside its block, beyond
+    /// what a point written to 6 decimals on a face misses it by (`limits::START_OVERLAP`,
+    /// or 1e-9 of the block's size if that is more): it acts as a point of the block all
+    /// the same, carried with its turn and strain, but a point off the rock is most
+    /// likely a slip (a coordinate of another block, or of the wrong sign), and an
+    /// excavation that cuts the block gives it to no piece.
+    fn points_outside(&self) -> Vec<Invalid> {
+        let mut warnings = Vec::new();
+        for (i, b) in self.blocks.iter().enumerate() {
+            if b.loads.is_empty() && b.fixed_points.is_empty() {
+                continue;
+            }
+            let Ok(poly) = ConvexPolygon::from_coords(&b.vertices) else {
+                continue;
+            };
+            let reach = limits::START_OVERLAP.max(1e-9 * poly.diameter());
+            let points =
+                (b.loads.iter().enumerate())
+                    .map(|(k, l)| (format!("blocks[{i}].loads[{k}].at"), "load", l.at))
+                    .chain((b.fixed_points.iter().enumerate()).map(|(k, &q)| {
+                        (format!("blocks[{i}].fixed_points[{k}]"), "fixed point", q)
+                    }));
+            for (key, what, at) in points {
+                if !poly.contains_within(DVec2::from(at), reach) {
+                    warnings.push(invalid(
+                        key,
+                        format!(
+                            "the {what} at ({}, {}) lies outside block `{}`: it acts as a \
+                             point of the block all the same, moving with it, and an \
+                             excavation that cuts the block drops it",
+                            at[0], at[1], b.id
+                        ),
+                    ));
+                }
+            }
+        }
+        warnings
     }
 
     /// A warning where the scene writes a free block smaller than d_tol^2 wedged among

@@ -599,7 +599,8 @@ fn excavate(
                 }
                 m += 1;
                 let pv = part.vertices();
-                let holds = |q: DVec2| part.contains_within(q, eps);
+                // Within what a point written to 6 decimals on a face misses it by.
+                let holds = |q: DVec2| part.contains_within(q, eps.max(limits::START_OVERLAP));
                 let mut loads = Vec::new();
                 for l in &b.loads {
                     if holds(DVec2::from(l.at)) && !claimed(&scene.blocks, &b.id, l.at) {

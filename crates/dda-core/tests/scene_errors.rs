@@ -333,6 +333,33 @@ fn a_block_smaller_than_the_contact_tolerance_is_warned_of() {
     assert!(model.warnings.is_empty(), "{:?}", model.warnings);
 }
 
+/// A load or a fixed point off its block is warned of, naming its key: one on the
+/// block's face, or 1.5e-6 m off it (a point written to 6 decimals on a face that is
+/// neither level nor upright misses it by up to 7e-7 m), is not.
+#[test]
+fn a_load_or_fixed_point_off_its_block_is_warned_of() {
+    let text = GOOD.replace(
+        "velocity = [1.0, 0.0]",
+        "velocity = [1.0, 0.0]\n\
+         loads = [{ at = [0.5, 2.0], force = [0.0, -1.0] }, { at = [0.5, 2.5], force = [0.0, -1.0] }]\n\
+         fixed_points = [[1.0000015, 1.5], [3.0, 1.5]]",
+    );
+    assert_ne!(text, GOOD);
+    let (_, model) = Scene::parse(&text, Format::Toml, "s.toml").expect("valid");
+    let keys: Vec<&str> = model.warnings.iter().map(|w| w.key.as_str()).collect();
+    assert_eq!(
+        keys,
+        ["blocks[1].loads[1].at", "blocks[1].fixed_points[1]"],
+        "{:?}",
+        model.warnings
+    );
+    assert!(
+        model.warnings[0].message.contains("`slider`"),
+        "{:?}",
+        model.warnings
+    );
+}
+
 const SLIDER_LINE: &str = "vertices = [[0.0, 1.0], [1.0, 1.0], [1.0, 2.0], [0.0, 2.0]]";
 
 #[test]
