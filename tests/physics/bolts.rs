@@ -9,6 +9,7 @@
 // A panic is how a test reports failure.
 #![allow(clippy::unwrap_used)]
 
+use crate::by_hand::Turned;
 use dda::core::{Format, RunOptions, Scene, Simulation};
 use dda::geom::DVec2;
 
@@ -406,15 +407,8 @@ stiffness = 1e10
 /// within 1e-9 of a block's size of it, and all three were refused as lying in no block.
 #[test]
 fn a_point_written_on_a_face_finds_its_block() {
-    let (sin, cos) = 58.7f64.to_radians().sin_cos();
-    let turn = |x: f64, y: f64| {
-        let p = DVec2::new(x * cos - y * sin, x * sin + y * cos);
-        format!("[{:.6}, {:.6}]", p.x, p.y)
-    };
-    let outline = |points: &[(f64, f64)]| {
-        let v: Vec<String> = points.iter().map(|&(x, y)| turn(x, y)).collect();
-        format!("[{}]", v.join(", "))
-    };
+    let hand = Turned::new(58.7);
+    let (turn, outline) = (|x, y| hand.written(x, y), |p: &[_]| hand.outline(p));
     let text = format!(
         "name = \"on faces\"\n[analysis]\nduration = 0.01\ntime_step = 0.002\n\
          max_displacement = 0.001\nnormal_penalty = 1e10\n\

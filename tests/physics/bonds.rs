@@ -9,8 +9,8 @@
 // A panic is how a test reports failure.
 #![allow(clippy::unwrap_used)]
 
+use crate::by_hand::Turned;
 use dda::core::{Format, RunOptions, Scene, Simulation};
-use dda::geom::DVec2;
 
 const P: f64 = 1e10;
 const DENSITY: f64 = 2600.0;
@@ -206,20 +206,10 @@ fn a_bond_holds_over_the_faces_overlap_not_over_the_longer_face() {
 /// stopped the run on energy created settled.
 #[test]
 fn a_bond_written_by_hand_holds() {
-    let (sin, cos) = 58.7f64.to_radians().sin_cos();
-    let turn = |x: f64, y: f64| DVec2::new(x * cos - y * sin, x * sin + y * cos);
-    let outline = |points: &[(f64, f64)]| {
-        let v: Vec<String> = points
-            .iter()
-            .map(|&(x, y)| {
-                let p = turn(x, y);
-                format!("[{:.6}, {:.6}]", p.x, p.y)
-            })
-            .collect();
-        format!("[{}]", v.join(", "))
-    };
+    let hand = Turned::new(58.7);
+    let outline = |p: &[_]| hand.outline(p);
     let w = DENSITY * G;
-    let g = turn(0.0, -G);
+    let g = hand.point(0.0, -G);
     let roof = outline(&[(-2.0, 0.0), (2.0, 0.0), (2.0, 1.0), (-2.0, 1.0)]);
     let block = outline(&[(-0.5, -1.0), (0.5, -1.0), (0.5, 0.0), (-0.5, 0.0)]);
     for settle in [false, true] {

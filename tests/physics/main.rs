@@ -7,6 +7,7 @@
 mod arches;
 mod bolts;
 mod bonds;
+mod by_hand;
 mod columns;
 mod flush_joints;
 mod hard_cases;

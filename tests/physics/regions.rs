@@ -6,6 +6,7 @@
 // A panic is how a test reports failure.
 #![allow(clippy::unwrap_used)]
 
+use crate::by_hand::Turned;
 use dda::contact::ContactKey;
 use dda::core::{Format, RunOptions, Scene, Simulation};
 use dda::geom::{ConvexPolygon, DVec2};
@@ -279,19 +280,9 @@ fn the_parts_of_a_non_convex_block_move_as_one() {
 /// none, and the arm fell.
 #[test]
 fn a_body_written_to_six_decimals_finds_its_seams() {
-    let (sin, cos) = 61f64.to_radians().sin_cos();
-    let turn = |x: f64, y: f64| DVec2::new(x * cos - y * sin, x * sin + y * cos);
-    let outline = |points: &[(f64, f64)]| {
-        let v: Vec<String> = points
-            .iter()
-            .map(|&(x, y)| {
-                let p = turn(x, y);
-                format!("[{:.6}, {:.6}]", p.x, p.y)
-            })
-            .collect();
-        v.join(", ")
-    };
-    let g = turn(0.0, -9.81);
+    let hand = Turned::new(61.0);
+    let outline = |p: &[_]| hand.outline(p);
+    let g = hand.point(0.0, -9.81);
     // d_max 5 mm, and 0.1 mm, whose 1e-3 d_tol (2e-7 m) is below what the faces differ by
     // (7.5e-7 m from the arm's lower corner to the post's face).
     for d_max in [0.005, 0.0001] {
@@ -300,9 +291,9 @@ fn a_body_written_to_six_decimals_finds_its_seams() {
              max_displacement = {d_max}\nnormal_penalty = 1e10\ngravity = [{}, {}]\n\
              [materials.rock]\ndensity = 2600.0\nyoung = 5e9\npoisson = 0.25\n\
              [joints.default]\nfriction_deg = 30.0\n\
-             [[blocks]]\nid = \"ground\"\nmaterial = \"rock\"\nfixed = true\nvertices = [{}]\n\
-             [[blocks]]\nid = \"post\"\nmaterial = \"rock\"\nbody = \"L\"\nvertices = [{}]\n\
-             [[blocks]]\nid = \"arm\"\nmaterial = \"rock\"\nbody = \"L\"\nvertices = [{}]\n",
+             [[blocks]]\nid = \"ground\"\nmaterial = \"rock\"\nfixed = true\nvertices = {}\n\
+             [[blocks]]\nid = \"post\"\nmaterial = \"rock\"\nbody = \"L\"\nvertices = {}\n\
+             [[blocks]]\nid = \"arm\"\nmaterial = \"rock\"\nbody = \"L\"\nvertices = {}\n",
             g.x,
             g.y,
             outline(&[(-2.0, -1.0), (6.0, -1.0), (6.0, 0.0), (-2.0, 0.0)]),

@@ -84,12 +84,7 @@ impl Scene {
             seamed[i as usize] = true;
             seamed[j as usize] = true;
         }
-        let index: BTreeMap<&str, usize> = model
-            .blocks
-            .iter()
-            .enumerate()
-            .map(|(k, m)| (m.id.as_str(), k))
-            .collect();
+        let index = model.index_by_id();
         self.blocks
             .iter()
             .enumerate()
@@ -126,7 +121,7 @@ impl Scene {
             let Ok(poly) = ConvexPolygon::from_coords(&b.vertices) else {
                 continue;
             };
-            let reach = limits::START_OVERLAP.max(1e-9 * poly.diameter());
+            let reach = point_reach(&poly);
             let points =
                 (b.loads.iter().enumerate())
                     .map(|(k, l)| (format!("blocks[{i}].loads[{k}].at"), "load", l.at))
@@ -160,12 +155,7 @@ impl Scene {
     fn slivers_written(&self, model: &Model) -> Option<Invalid> {
         let d_tol = model.params.d_tol;
         let touch = glue_reach(d_tol);
-        let index: BTreeMap<&str, usize> = model
-            .blocks
-            .iter()
-            .enumerate()
-            .map(|(k, m)| (m.id.as_str(), k))
-            .collect();
+        let index = model.index_by_id();
         // (scene index, model index, area) of the small free blocks the scene writes (an
         // excavation's pieces of one carry ids of their own, and are not written).
         let small: Vec<(usize, usize, f64)> = self
@@ -755,23 +745,19 @@ pub(crate) fn no_material(key: &str, name: &str, scene: &Scene) -> Invalid {
 }
 
 /// The block holding `at` (key `key`): the first, in scene order, whose outline contains
-/// it (its boundary included, to 1e-9 of its size), else the first it lies within 2e-6 m
-/// of (`limits::START_OVERLAP`: a point written to 6 decimals on a face that is not
-/// level or upright lies up to 7e-7 m off it, outside the rock as often as in it), and
-/// the point.
+/// it (its boundary included, to 1e-9 of its size), else the first it lies within
+/// [`point_reach`] of (2e-6 m: a point written to 6 decimals on a face that is not level
+/// or upright lies up to 7e-7 m off it, outside the rock as often as in it), and the
+/// point.
 fn point_in(key: &str, at: [f64; 2], blocks: &[ModelBlock]) -> Result<(usize, DVec2), Invalid> {
     each_within(key, &at, &limits::COORDINATE)?;
     let p = DVec2::from(at);
-    let within = |reach: f64| {
-        move |b: &ModelBlock| {
-            let size = 1e-9 * b.polygon.diameter();
-            b.polygon.contains_within(p, size.max(reach))
-        }
-    };
+    let holds = |b: &ModelBlock| b.polygon.contains_within(p, 1e-9 * b.polygon.diameter());
+    let near = |b: &ModelBlock| b.polygon.contains_within(p, point_reach(&b.polygon));
     blocks
         .iter()
-        .position(within(0.0))
-        .or_else(|| blocks.iter().position(within(limits::START_OVERLAP)))
+        .position(holds)
+        .or_else(|| blocks.iter().position(near))
         .map(|i| (i, p))
         .ok_or_else(|| {
             invalid(
@@ -877,6 +863,13 @@ fn check_start_overlaps(blocks: &[ModelBlock]) -> Result<(), Invalid> {
         }
     }
     Ok(())
+}
+
+/// How far outside block `p` a point written by hand may lie and still be of it, m: as
+/// far as two blocks may overlap at the start ([`start_overlap`]), what a point written
+/// to 6 decimals on a face that is neither level nor upright misses it by.
+pub(crate) fn point_reach(p: &ConvexPolygon) -> f64 {
+    start_overlap(p, p)
 }
 
 /// How far two outlines may overlap at the start, m: `limits::START_OVERLAP`, or 1e-9 of
@@ -1402,6 +1395,13 @@ impl Model {
     /// another: [`Model::joint_of_contact`]).
     pub fn joint_between(&self, a: usize, b: usize) -> &JointProps {
         self.joint_of_materials(self.blocks[a].material, self.blocks[b].material)
+    }
+
+    /// Each block's index by its id.
+    pub(crate) fn index_by_id(&self) -> BTreeMap<&str, usize> {
+        (self.blocks.iter().enumerate())
+            .map(|(k, m)| (m.id.as_str(), k))
+            .collect()
     }
 
     /// The bodies as the blocks not `removed` (a flag for each block, in scene order) hold

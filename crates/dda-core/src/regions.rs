@@ -8,7 +8,7 @@
 //! blocks.
 
 use crate::limits;
-use crate::model::start_overlap;
+use crate::model::{point_reach, start_overlap};
 use crate::scene::{BlockSpec, ExcavationSpec, Invalid, JointSetSpec, RegionSpec, Scene, invalid};
 use dda_geom::{
     Aabb, ConvexPolygon, DVec2, Joint, JointFamily, JointSet, JointSetError, Line, Outline,
@@ -555,6 +555,9 @@ fn excavate(
         }
         let body = b.body.clone().unwrap_or_else(|| b.id.clone());
         let eps = 1e-9 * poly.diameter();
+        // A piece holds a load, a fixed point, a bolt's end or a measured point within
+        // what a point written to 6 decimals on a face misses it by, as a block does.
+        let reach = point_reach(&poly);
         // A part outside the outline smaller than d_tol^2, and than a tenth of the
         // block, is a sliver between the outline and a face or corner of the block close
         // to it: dropped, unless it holds one of the block's loads or fixed points, a
@@ -565,9 +568,6 @@ fn excavate(
         let sliver: Vec<bool> = (cut.pieces.iter())
             .flat_map(|piece| piece.parts.iter().map(move |part| (piece, part)))
             .map(|(piece, part)| {
-                // Within what a point written to 6 decimals may miss a face by, as a
-                // bolt's end or a measured point finds its block (`model::point_in`).
-                let reach = eps.max(limits::START_OVERLAP);
                 let holds = |q: [f64; 2]| part.contains_within(DVec2::from(q), reach);
                 part.area() < sliver_area
                     && !inside(piece)
@@ -599,8 +599,7 @@ fn excavate(
                 }
                 m += 1;
                 let pv = part.vertices();
-                // Within what a point written to 6 decimals on a face misses it by.
-                let holds = |q: DVec2| part.contains_within(q, eps.max(limits::START_OVERLAP));
+                let holds = |q: DVec2| part.contains_within(q, reach);
                 let mut loads = Vec::new();
                 for l in &b.loads {
                     if holds(DVec2::from(l.at)) && !claimed(&scene.blocks, &b.id, l.at) {
