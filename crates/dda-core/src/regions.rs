@@ -189,6 +189,25 @@ pub fn expand(scene: &Scene) -> Result<(Scene, Dropped), Invalid> {
         if r.id.trim().is_empty() {
             return Err(invalid(format!("{key}.id"), "must not be empty"));
         }
+        // A region's id names its blocks, and selects them (`seismic.blocks`).
+        let clash = scene.regions[..i]
+            .iter()
+            .position(|o| o.id == r.id)
+            .map(|j| format!("regions[{j}]"))
+            .or_else(|| {
+                let k = scene.blocks.iter().position(|b| b.id == r.id)?;
+                Some(format!("blocks[{k}]"))
+            });
+        if let Some(other) = clash {
+            return Err(invalid(
+                format!("{key}.id"),
+                format!(
+                    "`{}` is also the id of {other}: a region's id names its blocks (`{}.1`, \
+                     `{}.2`, ...) and selects them, so it must be unique",
+                    r.id, r.id, r.id
+                ),
+            ));
+        }
         if !scene.materials.contains_key(&r.material) {
             return Err(crate::model::no_material(
                 &format!("{key}.material"),
@@ -269,6 +288,13 @@ pub fn expand(scene: &Scene) -> Result<(Scene, Dropped), Invalid> {
     out.regions.clear();
     let mut dropped = Dropped::default();
     let mut total = 0.0;
+    // Every block id so far, and what wrote it: a block of the scene's, or a region's.
+    let mut ids: BTreeMap<String, String> = scene
+        .blocks
+        .iter()
+        .enumerate()
+        .map(|(k, b)| (b.id.clone(), format!("blocks[{k}]")))
+        .collect();
     for (i, r) in scene.regions.iter().enumerate() {
         let key = format!("regions[{i}]");
         let shape = &outlines[i];
@@ -339,12 +365,23 @@ pub fn expand(scene: &Scene) -> Result<(Scene, Dropped), Invalid> {
                             .unwrap_or_default()
                     })
                     .collect();
+                let block = if glued {
+                    format!("{id}.{}", m + 1)
+                } else {
+                    id.clone()
+                };
+                if let Some(other) = ids.insert(block.clone(), format!("a block of {key}")) {
+                    return Err(invalid(
+                        format!("{key}.id"),
+                        format!(
+                            "region `{}` names a block `{block}`, the id of {other}: rename \
+                             the region or that block",
+                            r.id
+                        ),
+                    ));
+                }
                 out.blocks.push(BlockSpec {
-                    id: if glued {
-                        format!("{id}.{}", m + 1)
-                    } else {
-                        id.clone()
-                    },
+                    id: block,
                     material: r.material.clone(),
                     vertices: part.vertices().iter().map(|v| [v.x, v.y]).collect(),
                     fixed: r.fixed,

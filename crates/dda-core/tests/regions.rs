@@ -63,7 +63,7 @@ fn a_region_is_cut_into_blocks_named_after_it() {
 
 #[test]
 fn bad_regions_and_sets_are_named_with_key_and_line() {
-    let cases: [(&str, &str, &str, &str, usize); 12] = [
+    let cases: [(&str, &str, &str, &str, usize); 14] = [
         // (line to replace, replacement, expected key, words in the message, nth line)
         (
             "joint_sets = [\"bedding\", \"cross\"]",
@@ -152,6 +152,23 @@ fn bad_regions_and_sets_are_named_with_key_and_line() {
             "joint_sets = [\"bedding\", \"cross\"]\nmin_area = 100.0",
             "regions[1].min_area",
             "nothing is left of it",
+            0,
+        ),
+        (
+            // Two regions of one id: it names their blocks, and selects them.
+            "id = \"slope\"",
+            "id = \"base\"",
+            "regions[1].id",
+            "`base` is also the id of regions[0]",
+            0,
+        ),
+        (
+            // A block of the scene's with the id the slope's first piece takes.
+            "[[regions]]",
+            "[[blocks]]\nid = \"slope.1\"\nmaterial = \"rock\"\nfixed = true\n\
+             vertices = [[100.0, 0.0], [101.0, 0.0], [101.0, 1.0]]\n[[regions]]",
+            "regions[1].id",
+            "names a block `slope.1`, the id of blocks[0]",
             0,
         ),
     ];
