@@ -1,6 +1,6 @@
 //! The engine's physics across the layers: the paper's section 4 hard cases with every
 //! detector (reviewed snapshots), its two-set columns with every detector, a jointed slope written as a region, random hard pairs, structures on flush joints, bonded
-//! joints, and
+//! joints, masonry arches against limit analysis, a wheel rolling between its bounds, and
 //! bit-identical resume and thread counts. One test binary, so that the suite links once
 //! for all of them.
 
@@ -15,6 +15,7 @@ mod hard_pairs;
 mod impacts;
 mod regions;
 mod resume;
+mod rolling;
 mod seismic;
 mod stacks;
 mod statics;
