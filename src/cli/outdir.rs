@@ -120,8 +120,26 @@ fn check_own_folder(dir: &Path, what: &str) -> Result<(), Failure> {
     Ok(())
 }
 
+/// Refuses `path` if it is a symbolic link: a run replaces its output folder (and moves
+/// its staging folder) whole, and would replace the link, which it did not write, after
+/// removing the files of the run it points to; `what` names its role in the message.
+fn not_a_link(path: &Path, what: &str) -> Result<(), Failure> {
+    if path
+        .symlink_metadata()
+        .is_ok_and(|m| m.file_type().is_symlink())
+    {
+        return Err(bad(format!(
+            "{what} {} is a symbolic link; a run replaces its folder whole, and dda never \
+             replaces a file it did not write: give the folder itself, or a new one",
+            path.display()
+        )));
+    }
+    Ok(())
+}
+
 /// Checks that `out` may receive a run's results: a new path, or a finished run of
-/// ours that may be replaced; never the working directory or one of its ancestors.
+/// ours that may be replaced (not through a symbolic link); never the working
+/// directory or one of its ancestors.
 pub fn check_out(out: &Path) -> Result<(), Failure> {
     if out.file_name().is_none() {
         return Err(bad(format!(
@@ -139,6 +157,7 @@ pub fn check_out(out: &Path) -> Result<(), Failure> {
         )));
     }
     if out.symlink_metadata().is_ok() {
+        not_a_link(out, "--out")?;
         check_own_folder(out, "--out")?;
     }
     Ok(())
@@ -186,6 +205,7 @@ impl Staging {
     /// run (which `dda resume` continues), and anything not written by dda.
     pub fn create(work: &Path, out: &Path) -> Result<Staging, Failure> {
         if work.symlink_metadata().is_ok() {
+            not_a_link(work, "the staging folder")?;
             check_own_folder(work, "the staging folder")?;
             let lock = lock(work)?;
             if work.join(super::run::CHECKPOINT_FILE).exists() {
@@ -235,6 +255,7 @@ impl Staging {
 
     /// Takes over the staging folder `work` of an interrupted run, to resume it.
     pub fn resume(work: &Path) -> Result<Staging, Failure> {
+        not_a_link(work, "the staging folder")?;
         check_own_folder(work, "the staging folder")?;
         Ok(Staging {
             dir: work.to_path_buf(),
@@ -266,12 +287,14 @@ impl Staging {
     pub fn publish(&mut self, out: &Path) -> Result<(), Failure> {
         self.keep = true;
         if out.symlink_metadata().is_ok() {
-            check_own_folder(out, "--out").map_err(|e| match e {
-                Failure::Input(m) | Failure::Output(m) => Failure::Output(format!(
-                    "{m} (it changed during the run; the results are kept in {})",
-                    self.dir.display()
-                )),
-            })?;
+            not_a_link(out, "--out")
+                .and_then(|()| check_own_folder(out, "--out"))
+                .map_err(|e| match e {
+                    Failure::Input(m) | Failure::Output(m) => Failure::Output(format!(
+                        "{m} (it changed during the run; the results are kept in {})",
+                        self.dir.display()
+                    )),
+                })?;
             remove_own(out).map_err(|e| output_error(e, out))?;
         }
         std::fs::rename(&self.dir, out).map_err(|e| output_error(e, out))?;

@@ -731,6 +731,46 @@ fn run_never_deletes_or_overwrites_a_file_it_did_not_write() {
     assert!(ours.join("summary.json").exists());
 }
 
+/// `--out` naming a symbolic link to an earlier run of ours is refused (exit 2): a run
+/// replaces its folder whole, which would replace the link (the user's) after removing
+/// the files of the run it points to. Before, the run removed those files through the
+/// link, could not move its results over the link (exit 1, "Not a directory"), and left
+/// them in a staging folder. A stopped run resumed through a link is refused the same way.
+#[cfg(unix)]
+#[test]
+fn an_out_that_is_a_symbolic_link_is_refused_keeping_the_run_behind_it() {
+    let dir = scratch("out-link");
+    let ours = dir.join("ours");
+    assert!(run_scene(&ours, &["--quiet"]).status.success());
+    let before = listing(&ours);
+    let summary = std::fs::read_to_string(ours.join("summary.json")).unwrap();
+    let link = dir.join("link");
+    std::os::unix::fs::symlink(&ours, &link).unwrap();
+    let o = run_scene(&link, &["--quiet"]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("link") && err.contains("symbolic link"), "{err}");
+    assert_eq!(listing(&ours), before);
+    assert_eq!(
+        std::fs::read_to_string(ours.join("summary.json")).unwrap(),
+        summary
+    );
+    assert_eq!(listing(&dir), ["link", "ours"], "no staging folder left");
+
+    // A stopped run, resumed through a link to it.
+    let stopped = dir.join("stopped");
+    let o = run_scene(&stopped, &["--quiet", "--max-steps", "2"]);
+    assert_eq!(o.status.code(), Some(1));
+    let before = listing(&stopped);
+    let to_stopped = dir.join("to-stopped");
+    std::os::unix::fs::symlink(&stopped, &to_stopped).unwrap();
+    let o = dda(&["resume", to_stopped.to_str().unwrap(), "--quiet"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("symbolic link"));
+    assert_eq!(listing(&stopped), before);
+    assert!(stopped.join("checkpoint.bin").is_file());
+}
+
 /// Malformed JSON whose key/line locator once looped forever (`[}`) gets an answer at
 /// once: exit 2 naming the file.
 #[test]
