@@ -749,7 +749,10 @@ fn an_out_that_is_a_symbolic_link_is_refused_keeping_the_run_behind_it() {
     let o = run_scene(&link, &["--quiet"]);
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("link") && err.contains("symbolic link"), "{err}");
+    assert!(
+        err.contains("link") && err.contains("symbolic link"),
+        "{err}"
+    );
     assert_eq!(listing(&ours), before);
     assert_eq!(
         std::fs::read_to_string(ours.join("summary.json")).unwrap(),
