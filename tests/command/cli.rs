@@ -172,18 +172,14 @@ fn run_writes_summary_history_and_frames() {
     }
 }
 
-/// The world box (min x, min y, max x, max y) an SVG frame shows: its inner viewBox,
-/// "min_x -max_y width height" (y up in the world, down in SVG).
+/// The world box (min x, min y, max x, max y) an SVG frame shows, as its description
+/// states it ("view: x A to B m, y C to D m; ...").
 fn frame_box(svg: &str) -> [f64; 4] {
-    let at = svg.rfind("viewBox=\"").unwrap() + "viewBox=\"".len();
-    let v: Vec<f64> = svg[at..]
-        .split('"')
-        .next()
-        .unwrap()
-        .split_whitespace()
-        .map(|x| x.parse().unwrap())
-        .collect();
-    [v[0], -v[1] - v[3], v[0] + v[2], -v[1]]
+    let at = svg.find("<desc>view: x ").unwrap() + "<desc>view: x ".len();
+    // "A to B m, y C to D m; ..."
+    let words: Vec<&str> = svg[at..].split_whitespace().take(8).collect();
+    let num = |w: &str| w.parse::<f64>().unwrap();
+    [num(words[0]), num(words[5]), num(words[2]), num(words[7])]
 }
 
 /// A block that travels far from its start stays in every picture: the frames' view

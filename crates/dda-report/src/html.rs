@@ -722,10 +722,23 @@ async function ddaFrames(data) {
       ctx.fillText(fmt(x, step), px(x), h - AXES + 17);
     }
     ctx.fillText("x (m)", (AXES + w) / 2, h - 6);
-    ctx.textAlign = "right";
-    for (let y = Math.ceil(wy(h - AXES) / step) * step; py(y) >= 10; y += step) {
+    // Labels too long for the margin (coordinates of a survey grid, 4000020) run
+    // along the axis instead of across it.
+    const ys = [];
+    for (let y = Math.ceil(wy(h - AXES) / step) * step; py(y) >= 10; y += step) ys.push(y);
+    const along = ys.some((y) => ctx.measureText(fmt(y, step)).width > AXES - 11);
+    ctx.textAlign = along ? "center" : "right";
+    for (const y of ys) {
       ctx.beginPath(); ctx.moveTo(AXES, py(y)); ctx.lineTo(AXES - 5, py(y)); ctx.stroke();
-      ctx.fillText(fmt(y, step), AXES - 7, py(y) + 4);
+      if (along) {
+        ctx.save();
+        ctx.translate(AXES - 9, py(y));
+        ctx.rotate(-Math.PI / 2);
+        ctx.fillText(fmt(y, step), 0, 0);
+        ctx.restore();
+      } else {
+        ctx.fillText(fmt(y, step), AXES - 7, py(y) + 4);
+      }
     }
     ctx.save();
     ctx.translate(11, (h - AXES) / 2);

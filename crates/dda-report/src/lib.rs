@@ -361,9 +361,21 @@ pub fn frame_svg(model: &Model, frame: &Frame, view: &Aabb) -> String {
     let size = view.size();
     let width = 800.0;
     let height = (width * size.y / size.x).clamp(100.0, 4000.0);
+    // The axes, in metres.
+    let (xt, yt) = (
+        plot::Ticks::new(view.min.x, view.max.x),
+        plot::Ticks::new(view.min.y, view.max.y),
+    );
     // Margins (pixels): the axes at the left and the bottom, the time and the legend on
-    // top.
-    let (ml, mt, mr, mb) = (50.0, 30.0, 15.0, 40.0);
+    // top. The left one holds the y labels (7 pixels a character at 12 px, a survey
+    // grid's 4000020 included) beside the axis title.
+    let widest = yt
+        .values()
+        .filter(|&v| v >= view.min.y && v <= view.max.y)
+        .map(|v| yt.label(v).chars().count())
+        .max()
+        .unwrap_or(0);
+    let (ml, mt, mr, mb) = ((30.0 + 7.0 * widest as f64).max(50.0), 30.0, 15.0, 40.0);
     let stroke = 0.6 * size.x / width;
     let vmax = frame
         .speed
@@ -388,11 +400,6 @@ pub fn frame_svg(model: &Model, frame: &Frame, view: &Aabb) -> String {
         escape(&model.name),
         frame.t,
         vmax
-    );
-    // The axes, in metres.
-    let (xt, yt) = (
-        plot::Ticks::new(view.min.x, view.max.x),
-        plot::Ticks::new(view.min.y, view.max.y),
     );
     let px = |x: f64| ml + (x - view.min.x) / size.x * width;
     let py = |y: f64| mt + (view.max.y - y) / size.y * height;
@@ -433,12 +440,20 @@ pub fn frame_svg(model: &Model, frame: &Frame, view: &Aabb) -> String {
         mt + height + 34.0,
         y = mt + height / 2.0
     );
-    // The blocks, in world coordinates (y up) in a viewport of their own.
+    // The blocks, in metres from the view's top left corner (y down) in a viewport of
+    // their own: a picture's renderer takes its coordinates in single precision, which
+    // at a survey grid's 4e6 m is a quarter of a metre.
     let _ = writeln!(
         s,
-        r#"<svg x="{ml}" y="{mt}" width="{width:.0}" height="{height:.0}" viewBox="{} {} {} {}" preserveAspectRatio="none">"#,
-        view.min.x, -view.max.y, size.x, size.y
+        r#"<desc>view: x {} to {} m, y {} to {} m; the blocks' coordinates are metres from its top left corner, y down</desc>"#,
+        view.min.x, view.max.x, view.min.y, view.max.y
     );
+    let _ = writeln!(
+        s,
+        r#"<svg x="{ml}" y="{mt}" width="{width:.0}" height="{height:.0}" viewBox="0 0 {} {}" preserveAspectRatio="none">"#,
+        size.x, size.y
+    );
+    let at = view_point(view);
     let _ = writeln!(
         s,
         r#"<g stroke="black" stroke-width="{stroke}" stroke-linejoin="round">"#
@@ -458,8 +473,8 @@ pub fn frame_svg(model: &Model, frame: &Frame, view: &Aabb) -> String {
             };
             format!("hsl({:.0},75%,60%)", 240.0 - 240.0 * f)
         };
-        let v: Vec<DVec2> = frame.polygon(i).collect();
-        let pts: Vec<String> = v.iter().map(|v| format!("{},{}", v.x, -v.y)).collect();
+        let v: Vec<DVec2> = frame.polygon(i).map(&at).collect();
+        let pts: Vec<String> = v.iter().map(|v| format!("{},{}", v.x, v.y)).collect();
         match &drawn[i] {
             None => {
                 let _ = writeln!(
@@ -481,7 +496,7 @@ pub fn frame_svg(model: &Model, frame: &Frame, view: &Aabb) -> String {
                 for &(k, s0, s1) in stretches {
                     let (a, b) = (v[k], v[(k + 1) % v.len()]);
                     let (p, q) = (a.lerp(b, s0), a.lerp(b, s1));
-                    let _ = write!(path, "M{},{}L{},{}", p.x, -p.y, q.x, -q.y);
+                    let _ = write!(path, "M{},{}L{},{}", p.x, p.y, q.x, q.y);
                 }
                 let _ = writeln!(s, r#"<path fill="none" d="{path}"/>"#);
             }
@@ -489,6 +504,13 @@ pub fn frame_svg(model: &Model, frame: &Frame, view: &Aabb) -> String {
     }
     s.push_str("</g>\n</svg>\n</svg>\n");
     s
+}
+
+/// The picture coordinates of world point `v` in `view`: metres from its top left
+/// corner, y down ([`frame_svg`]).
+fn view_point(view: &Aabb) -> impl Fn(DVec2) -> DVec2 {
+    let (x0, y1) = (view.min.x, view.max.y);
+    move |v: DVec2| DVec2::new(v.x - x0, y1 - v.y)
 }
 
 /// An SVG picture of a run's outcome in `view` (y up): the blocks at the start as dashed
@@ -511,18 +533,16 @@ pub fn outcome_svg(
         4.0 * stroke,
         3.0 * stroke
     );
+    let at = view_point(view);
+    let point = |v: &DVec2| {
+        let p = at(*v);
+        format!("{:.6},{:.6}", p.x, p.y)
+    };
     for p in start {
-        let pts: Vec<String> = p
-            .vertices()
-            .iter()
-            .map(|v| format!("{:.6},{:.6}", v.x, -v.y))
-            .collect();
+        let pts: Vec<String> = p.vertices().iter().map(point).collect();
         let _ = writeln!(extra, r#"<polygon points="{}"/>"#, pts.join(" "));
     }
-    let pts: Vec<String> = path
-        .iter()
-        .map(|v| format!("{:.6},{:.6}", v.x, -v.y))
-        .collect();
+    let pts: Vec<String> = path.iter().map(point).collect();
     let _ = writeln!(
         extra,
         r##"</g><polyline fill="none" stroke="#c03020" stroke-width="{}" points="{}"/>"##,

@@ -174,16 +174,21 @@ impl Ticks {
     }
 
     /// The label of tick `v`: as many decimals as the step needs, or exponent form
-    /// outside 1e-3 to 1e5.
+    /// outside 1e-3 to 1e5, with the digits that tell one tick from the next (a survey
+    /// grid's 4000010 and 4000020, 10 m apart, print in full).
     pub fn label(&self, v: f64) -> String {
         let a = self.step.abs().max(v.abs());
         if v == 0.0 {
             return "0".into();
         }
-        if !(1e-3..1e5).contains(&a) || self.step < 1e-4 {
-            return format!("{v:.1e}");
-        }
         let decimals = (-self.step.log10().floor()).max(0.0) as usize;
+        if (1e-4..1e5).contains(&self.step) && a >= 1e5 {
+            return format!("{v:.decimals$}");
+        }
+        if !(1e-3..1e5).contains(&a) || self.step < 1e-4 {
+            let digits = (v.abs().log10().floor() - self.step.log10().floor()).clamp(1.0, 15.0);
+            return format!("{v:.*e}", digits as usize);
+        }
         format!("{v:.decimals$}")
     }
 }
@@ -224,6 +229,14 @@ mod tests {
         assert_eq!(t.label(0.6000000000000001), "0.6");
         let big = Ticks::new(0.0, 15930492.342);
         assert_eq!(big.label(4e6), "4.0e6");
+        // Coordinates of a survey grid: ticks 10 m apart at 4e6 m, and 1e5 m apart at
+        // 4e8 m, each told from the next.
+        let grid = Ticks::new(4_000_003.0, 4_000_047.0);
+        assert_eq!(grid.step, 10.0);
+        assert_eq!(grid.label(4_000_010.0), "4000010");
+        let far = Ticks::new(4.0e8, 4.0e8 + 5.0e5);
+        assert_eq!(far.step, 1.0e5);
+        assert_eq!(far.label(4.001e8), "4.001e8");
     }
 
     /// A run of one step has one point a history: the plot shows it as a dot, on a time
