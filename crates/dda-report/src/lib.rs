@@ -588,6 +588,48 @@ pub fn escape(s: &str) -> String {
 mod tests {
     use super::*;
 
+    /// A scene in a survey grid's coordinates (5e5 m east, 4e6 m north) is drawn in
+    /// metres from the view's corner: every coordinate of its blocks lies within the
+    /// view's size (a renderer reads them in single precision, which at 4e6 m is a
+    /// quarter of a metre), and the picture states the view in world coordinates.
+    #[test]
+    fn a_frame_far_from_the_origin_is_drawn_from_the_view_s_corner() {
+        let text = "name = \"grid\"\n[analysis]\nduration = 0.01\ntime_step = 0.01\n\
+                    max_displacement = 0.01\nnormal_penalty = 1e9\n[materials.rock]\n\
+                    density = 2600.0\nyoung = 1e9\npoisson = 0.25\n[[blocks]]\nid = \"b\"\n\
+                    material = \"rock\"\nvertices = [[500000.0, 4000000.0], [500003.0, \
+                    4000000.0], [500003.0, 4000002.0], [500000.0, 4000002.0]]\n";
+        let (_, model) =
+            dda_core::Scene::parse(text, dda_core::Format::Toml, "grid.toml").expect("valid");
+        let sim = Simulation::new(model, dda_core::RunOptions::default());
+        let view = frame_view(sim.model());
+        let frame = Frame::of(&sim, true, frame_resolution(&view));
+        let svg = frame_svg(sim.model(), &frame, &view);
+        let size = view.size();
+        let points = svg
+            .split("points=\"")
+            .skip(1)
+            .map(|p| p.split('"').next().unwrap_or_default());
+        let mut seen = 0;
+        for p in points {
+            for xy in p.split_whitespace() {
+                let (x, y) = xy.split_once(',').expect("x,y");
+                let (x, y): (f64, f64) = (x.parse().expect("x"), y.parse().expect("y"));
+                assert!(
+                    (0.0..=size.x).contains(&x) && (0.0..=size.y).contains(&y),
+                    "{xy}"
+                );
+                seen += 1;
+            }
+        }
+        assert_eq!(seen, 4, "{svg}");
+        let desc = format!(
+            "<desc>view: x {} to {} m, y {} to {} m;",
+            view.min.x, view.max.x, view.min.y, view.max.y
+        );
+        assert!(svg.contains(&desc), "{svg}");
+    }
+
     /// Six significant digits, as short as they print: trailing zeros and exponents
     /// left out, zero as it is.
     #[test]
