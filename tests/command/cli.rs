@@ -793,6 +793,44 @@ fn malformed_json_is_answered_at_once() {
     }
 }
 
+/// A scene file that is not a regular file gets an answer at once, exit 2 naming it:
+/// a pipe named like a scene blocked the read until a writer came (forever), and a
+/// link to /dev/zero read without end.
+#[cfg(unix)]
+#[test]
+fn a_scene_that_is_no_regular_file_is_refused_at_once() {
+    let dir = scratch("not-a-file");
+    let zero = dir.join("zero.toml");
+    std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+    let folder = dir.join("folder.toml");
+    std::fs::create_dir(&folder).unwrap();
+    let mut files = vec![zero, folder];
+    let pipe = dir.join("pipe.toml");
+    if Command::new("mkfifo")
+        .arg(&pipe)
+        .status()
+        .is_ok_and(|s| s.success())
+    {
+        files.push(pipe);
+    }
+    for file in &files {
+        let name = file.file_name().unwrap().to_string_lossy().into_owned();
+        for cmd in ["check", "run"] {
+            let o = dda_within(
+                &[cmd, file.to_str().unwrap()],
+                std::time::Duration::from_secs(20),
+            )
+            .unwrap_or_else(|| panic!("`dda {cmd}` hung on {name}"));
+            assert_eq!(o.status.code(), Some(2), "{name}");
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert!(
+                err.contains(&name) && err.contains("not a regular file"),
+                "{err}"
+            );
+        }
+    }
+}
+
 /// Nesting 50,000 deep once overflowed the stack (exit 134): now exit 2, naming the
 /// file, the line and the documented depth, in either format.
 #[test]

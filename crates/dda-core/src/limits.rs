@@ -184,6 +184,10 @@ pub const MAX_RECORD_SAMPLES: f64 = 1e6;
 /// Largest `seismic` record file read, bytes: 1e6 samples of three numbers written in
 /// full precision take about 70 MB.
 pub const MAX_RECORD_BYTES: u64 = 128 << 20;
+/// Largest scene file read, bytes: a run's `scene.json` of a million blocks, each
+/// listed with its vertices in full precision, and a record of a million samples take
+/// some 0.5 GB.
+pub const MAX_SCENE_BYTES: u64 = 1 << 30;
 /// `seismic.scale`.
 pub const RECORD_SCALE: Range = Range {
     min: -1e3,

@@ -544,7 +544,10 @@ impl Scene {
                 ));
             }
         };
-        let text = std::fs::read_to_string(path).map_err(|e| fail(format!("cannot read: {e}")))?;
+        // A regular file of bounded size: a pipe or a device named like a scene would
+        // block the read, or never end it.
+        let text = read_limited(path, limits::MAX_SCENE_BYTES)
+            .map_err(|why| fail(format!("the scene file {why}")))?;
         Scene::parse_indexed(&text, format, &file, path.parent())
     }
 
