@@ -564,6 +564,9 @@ impl Scene {
         file: &str,
         dir: Option<&Path>,
     ) -> Result<(Scene, Model, LineIndex), SceneError> {
+        // A byte order mark, which editors on Windows write at the start of UTF-8 text,
+        // is no part of the scene (the JSON parser took it for a value).
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         if let Some(line) = nesting_beyond(text, format == Format::Toml, limits::MAX_NESTING) {
             return Err(SceneError {
                 file: file.to_string(),

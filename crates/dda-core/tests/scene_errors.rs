@@ -393,6 +393,22 @@ fn json_errors_name_key_and_line() {
     .expect_err("unknown key");
     assert!(e.message.contains("timestep"), "{e}");
     assert_eq!(e.line, Some(5), "{e}");
+    // Written by an editor on Windows: a byte order mark and CRLF line ends. Its error
+    // names the same key and line; valid, it reads as the plain text does (the mark
+    // was taken for a value: "s.json:1: expected value").
+    let windows = format!("\u{feff}{}", json.replace('\n', "\r\n"));
+    let e = Scene::parse(&windows, Format::Json, "s.json").expect_err("invalid");
+    assert_eq!(
+        (e.key.as_str(), e.line),
+        ("analysis.normal_penalty", Some(7)),
+        "{e}"
+    );
+    let valid = |text: &str| {
+        let (scene, _) = Scene::parse(&text.replace("-5", "1e9"), Format::Json, "s.json")
+            .unwrap_or_else(|e| panic!("{e}"));
+        scene
+    };
+    assert_eq!(valid(&windows), valid(json));
 }
 
 /// Two 1 m blocks sharing a face whose coordinates, written by hand to 6 decimals, differ
