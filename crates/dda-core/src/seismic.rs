@@ -151,10 +151,18 @@ pub fn read_record(text: &str) -> Result<(Vec<[f64; 3]>, Vec<usize>), LineError>
             continue;
         }
         if cells.len() != 3 {
+            // A spreadsheet in a language that writes decimal commas separates its
+            // cells by semicolons.
+            let hint = if line.contains(';') {
+                "; the line has semicolons: write the record with decimal points and cells \
+                 separated by commas"
+            } else {
+                ""
+            };
             return Err((
                 i + 1,
                 format!(
-                    "{} cells, expected 3 (t, ax, ay separated by commas)",
+                    "{} cells, expected 3 (t, ax, ay separated by commas){hint}",
                     cells.len()
                 ),
             ));
@@ -286,6 +294,10 @@ mod tests {
         assert_eq!(err.0, 3);
         assert!(err.1.contains("ax") && err.1.contains("`x`"), "{}", err.1);
         assert_eq!(read_record("t,ax,ay\n0,0\n").unwrap_err().0, 2);
+        // A spreadsheet's record with decimal commas and semicolons: told so.
+        let err = read_record("t;ax;ay\n0,00;0,0;0,0\n").unwrap_err();
+        assert_eq!(err.0, 2);
+        assert!(err.1.contains("semicolons"), "{}", err.1);
         let (s, _) = read_record("t,ax,ay\n0,0,0\n0.2,0,0\n0.1,0,0\n").unwrap();
         assert_eq!(check_samples(&s).unwrap_err().0, 2);
         assert!(check_samples(&[[0.0, f64::NAN, 0.0]]).is_err());
