@@ -473,8 +473,8 @@ pub fn frame_svg(model: &Model, frame: &Frame, view: &Aabb) -> String {
             };
             format!("hsl({:.0},75%,60%)", 240.0 - 240.0 * f)
         };
-        let v: Vec<DVec2> = frame.polygon(i).map(&at).collect();
-        let pts: Vec<String> = v.iter().map(|v| format!("{},{}", v.x, v.y)).collect();
+        let v: Vec<DVec2> = frame.polygon(i).collect();
+        let pts: Vec<String> = v.iter().map(|&v| at(v)).collect();
         match &drawn[i] {
             None => {
                 let _ = writeln!(
@@ -496,7 +496,7 @@ pub fn frame_svg(model: &Model, frame: &Frame, view: &Aabb) -> String {
                 for &(k, s0, s1) in stretches {
                     let (a, b) = (v[k], v[(k + 1) % v.len()]);
                     let (p, q) = (a.lerp(b, s0), a.lerp(b, s1));
-                    let _ = write!(path, "M{},{}L{},{}", p.x, p.y, q.x, q.y);
+                    let _ = write!(path, "M{}L{}", at(p), at(q));
                 }
                 let _ = writeln!(s, r#"<path fill="none" d="{path}"/>"#);
             }
@@ -506,11 +506,27 @@ pub fn frame_svg(model: &Model, frame: &Frame, view: &Aabb) -> String {
     s
 }
 
-/// The picture coordinates of world point `v` in `view`: metres from its top left
-/// corner, y down ([`frame_svg`]).
-fn view_point(view: &Aabb) -> impl Fn(DVec2) -> DVec2 {
+/// The picture coordinates of world point `v` in `view`, written: metres from its top
+/// left corner, y down ([`frame_svg`]), to the frames' resolution in `view`
+/// ([`frame_resolution`]; the difference of two coordinates far from the origin
+/// carries their rounding in its last digits).
+fn view_point(view: &Aabb) -> impl Fn(DVec2) -> String {
     let (x0, y1) = (view.min.x, view.max.y);
-    move |v: DVec2| DVec2::new(v.x - x0, y1 - v.y)
+    let decimals = (-frame_resolution(view).log10()).ceil().max(0.0) as usize;
+    let short = move |x: f64| {
+        let t = format!("{x:.decimals$}");
+        let t = if t.contains('.') {
+            t.trim_end_matches('0').trim_end_matches('.')
+        } else {
+            &t
+        };
+        if t == "-0" {
+            "0".to_string()
+        } else {
+            t.to_string()
+        }
+    };
+    move |v: DVec2| format!("{},{}", short(v.x - x0), short(y1 - v.y))
 }
 
 /// An SVG picture of a run's outcome in `view` (y up): the blocks at the start as dashed
@@ -534,10 +550,7 @@ pub fn outcome_svg(
         3.0 * stroke
     );
     let at = view_point(view);
-    let point = |v: &DVec2| {
-        let p = at(*v);
-        format!("{:.6},{:.6}", p.x, p.y)
-    };
+    let point = |v: &DVec2| at(*v);
     for p in start {
         let pts: Vec<String> = p.vertices().iter().map(point).collect();
         let _ = writeln!(extra, r#"<polygon points="{}"/>"#, pts.join(" "));
