@@ -50,12 +50,39 @@ fn family(
             format!("must be a positive distance in m, got {}", s.spacing),
         ));
     }
-    if !limits::COORDINATE.contains(s.offset) {
-        return Err(invalid(
-            format!("{key}.offset"),
-            limits::COORDINATE.message(s.offset),
-        ));
+    let normal = JointSet {
+        dip_deg: s.dip_deg,
+        spacing: s.spacing,
+        offset: 0.0,
     }
+    .normal();
+    let offset = match (s.offset, s.through) {
+        (Some(_), Some(_)) => {
+            return Err(invalid(
+                format!("{key}.through"),
+                "give one of offset and through: both place the set's joints",
+            ));
+        }
+        (_, Some(p)) => {
+            if let Some(&c) = p.iter().find(|&&c| !limits::COORDINATE.contains(c)) {
+                return Err(invalid(
+                    format!("{key}.through"),
+                    limits::COORDINATE.message(c),
+                ));
+            }
+            normal.dot(DVec2::from(p))
+        }
+        (offset, None) => {
+            let offset = offset.unwrap_or(0.0);
+            if !limits::COORDINATE.contains(offset) {
+                return Err(invalid(
+                    format!("{key}.offset"),
+                    limits::COORDINATE.message(offset),
+                ));
+            }
+            offset
+        }
+    };
     if let Some(j) = &s.joint
         && !joints.contains_key(j)
     {
@@ -116,7 +143,7 @@ fn family(
         set: JointSet {
             dip_deg: s.dip_deg,
             spacing: s.spacing,
-            offset: s.offset,
+            offset,
         },
         spacing_cv,
         dip_spread_deg,

@@ -129,9 +129,13 @@ pub struct JointSetSpec {
     pub dip_deg: f64,
     /// Normal distance between neighbouring joints, m (the mean, if it varies).
     pub spacing: f64,
-    /// Position of one joint along the set's normal (-sin dip, cos dip), m.
-    #[serde(default)]
-    pub offset: f64,
+    /// Position of one joint along the set's normal (-sin dip, cos dip), m; default 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub offset: Option<f64>,
+    /// A point `[x, y]` one joint passes through, m: instead of `offset` (a joint
+    /// mapped at a known place, in a survey grid's coordinates).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub through: Option<[f64; 2]>,
     /// Contact properties of these joints: a `[joints.NAME]`; absent, the materials'.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub joint: Option<String>,

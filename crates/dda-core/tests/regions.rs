@@ -61,9 +61,48 @@ fn a_region_is_cut_into_blocks_named_after_it() {
     );
 }
 
+/// A set placed through a point one of its joints passes (`through`, a joint mapped at
+/// a known place) cuts the blocks that the offset of that line cuts: here the slope's
+/// bedding (dip 35 degrees, offset 0.3 m) through the point 0.3 m along its normal, and
+/// through that point moved 7 m along the joint. The same blocks, to rounding.
+#[test]
+fn a_set_placed_through_a_point_cuts_as_its_offset_does() {
+    let blocks = |text: &str| {
+        let (scene, _) = Scene::parse(text, Format::Toml, "slope.toml").unwrap();
+        scene.expanded().unwrap().blocks
+    };
+    let by_offset = blocks(SLOPE);
+    let (s, c) = 35f64.to_radians().sin_cos();
+    let (normal, along) = ([-s, c], [c, s]);
+    for shift in [0.0, 7.0] {
+        let p = [
+            0.3 * normal[0] + shift * along[0],
+            0.3 * normal[1] + shift * along[1],
+        ];
+        let text = SLOPE.replacen(
+            "offset = 0.3",
+            &format!("through = [{:?}, {:?}]", p[0], p[1]),
+            1,
+        );
+        assert_ne!(text, SLOPE);
+        let by_point = blocks(&text);
+        assert_eq!(by_point.len(), by_offset.len(), "shift {shift}");
+        for (a, b) in by_point.iter().zip(&by_offset) {
+            assert_eq!((&a.id, a.vertices.len()), (&b.id, b.vertices.len()));
+            for (u, v) in a.vertices.iter().zip(&b.vertices) {
+                assert!(
+                    (u[0] - v[0]).abs() < 1e-9 && (u[1] - v[1]).abs() < 1e-9,
+                    "{}: {u:?} against {v:?}",
+                    a.id
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn bad_regions_and_sets_are_named_with_key_and_line() {
-    let cases: [(&str, &str, &str, &str, usize); 14] = [
+    let cases: [(&str, &str, &str, &str, usize); 15] = [
         // (line to replace, replacement, expected key, words in the message, nth line)
         (
             "joint_sets = [\"bedding\", \"cross\"]",
@@ -155,6 +194,14 @@ fn bad_regions_and_sets_are_named_with_key_and_line() {
             0,
         ),
         (
+            // The bedding placed twice.
+            "offset = 0.3",
+            "offset = 0.3\nthrough = [1.0, 2.0]",
+            "joint_sets.bedding.through",
+            "one of offset and through",
+            0,
+        ),
+        (
             // Two regions of one id: it names their blocks, and selects them.
             "id = \"slope\"",
             "id = \"base\"",
@@ -225,7 +272,7 @@ fn set() -> impl Strategy<Value = JointSetSpec> {
         JointSetSpec {
             dip_deg,
             spacing,
-            offset,
+            offset: Some(offset),
             ..Default::default()
         }
     })
