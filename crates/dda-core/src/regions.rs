@@ -148,6 +148,7 @@ fn family(
         spacing_cv,
         dip_spread_deg,
         trace,
+        trace_origin: s.through.map_or(DVec2::ZERO, DVec2::from),
         seed: s.seed.unwrap_or(0) ^ name_hash,
     })
 }

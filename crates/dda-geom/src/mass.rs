@@ -320,6 +320,9 @@ pub struct JointFamily {
     pub dip_spread_deg: f64,
     /// Trace length and bridge length, m (`None`: persistent).
     pub trace: Option<(f64, f64)>,
+    /// The point from which the traces' random start is measured along each joint (the
+    /// origin; a point the set is placed through, so that the traces move with it).
+    pub trace_origin: DVec2,
     /// Seed of the draws.
     pub seed: u64,
 }
@@ -332,6 +335,7 @@ impl JointFamily {
             spacing_cv: 0.0,
             dip_spread_deg: 0.0,
             trace: None,
+            trace_origin: DVec2::ZERO,
             seed: 0,
         }
     }
@@ -431,7 +435,7 @@ impl JointFamily {
                 let d = line.direction();
                 let (t_lo, t_hi) = along(d);
                 let period = length + bridge;
-                let phase = period * 0.5 * (1.0 + rng.symmetric());
+                let phase = d.dot(self.trace_origin) + period * 0.5 * (1.0 + rng.symmetric());
                 let first = ((t_lo - phase - length) / period).floor();
                 let last = ((t_hi - phase) / period).ceil();
                 let count = (last - first + 1.0).max(0.0);

@@ -60,6 +60,7 @@ fn family() -> impl Strategy<Value = JointFamily> {
                 spacing_cv: cv.unwrap_or(0.0),
                 dip_spread_deg: spread.unwrap_or(0.0),
                 trace,
+                trace_origin: DVec2::ZERO,
                 seed,
             },
         )
