@@ -5,7 +5,8 @@
 // A panic is how a test reports failure.
 #![allow(clippy::unwrap_used)]
 
-use dda::core::{Format, RunOptions, Scene, Simulation};
+use crate::guarded;
+use dda::core::{Format, Scene};
 use std::fmt::Write;
 
 /// The start of a scene of stone blocks (E = 20 GPa) under gravity, joints at `friction`
@@ -89,17 +90,11 @@ fn crown_drop_detected(n: usize, t: f64, duration: f64, detector: &str) -> f64 {
         &format!("[analysis]\ndetector = \"{detector}\"\n"),
         1,
     );
-    let (_, model) = Scene::parse(&scene, Format::Toml, "arch.toml").unwrap();
-    let crown = 1 + n / 2;
-    let y0 = model.blocks[crown].polygon.centroid().y;
-    let options = RunOptions {
-        stop_on_violation: true,
-        ..RunOptions::default()
-    };
-    let mut sim = Simulation::new(model, options);
-    sim.run(|_, _| {})
-        .unwrap_or_else(|e| panic!("{n} voussoirs, t = {t} m, {detector}: {e}"));
-    y0 - sim.blocks()[crown].polygon.centroid().y
+    drop_of(
+        &scene,
+        1 + n / 2,
+        &format!("{n} voussoirs, t = {t} m, {detector}"),
+    )
 }
 
 /// A semicircular arch thicker than Heyman's least thickness under its own weight
@@ -183,16 +178,7 @@ fn a_settled_arch_on_free_piers_under_a_point_load_keeps_the_energy() {
             );
         }
     }
-    let (_, model) = Scene::parse(&s, Format::Toml, "arch-on-piers.toml").unwrap();
-    let crown = 3 + n / 2;
-    let y0 = model.blocks[crown].polygon.centroid().y;
-    let options = RunOptions {
-        stop_on_violation: true,
-        ..RunOptions::default()
-    };
-    let mut sim = Simulation::new(model, options);
-    sim.run(|_, _| {}).unwrap_or_else(|e| panic!("{e}"));
-    let fell = y0 - sim.blocks()[crown].polygon.centroid().y;
+    let fell = drop_of(&s, 3 + n / 2, "the arch on piers");
     assert!(
         fell > 1e-3,
         "the loaded arch's crown fell {fell} m in 0.2 s"
@@ -311,16 +297,12 @@ fn limit_load(
 
 /// How far block `block`'s centroid fell in the run of `scene` under the physics guard
 /// (a step that creates energy beyond 1% of the reference, or penetrates beyond d_tol,
-/// is an error).
-fn drop_of(scene: &str, block: usize) -> f64 {
+/// is an error, which names the run as `what`).
+fn drop_of(scene: &str, block: usize, what: &str) -> f64 {
     let (_, model) = Scene::parse(scene, Format::Toml, "arch.toml").unwrap();
     let y0 = model.blocks[block].polygon.centroid().y;
-    let options = RunOptions {
-        stop_on_violation: true,
-        ..RunOptions::default()
-    };
-    let mut sim = Simulation::new(model, options);
-    sim.run(|_, _| {}).unwrap_or_else(|e| panic!("{e}"));
+    let mut sim = guarded(model);
+    sim.run(|_, _| {}).unwrap_or_else(|e| panic!("{what}: {e}"));
     y0 - sim.blocks()[block].polygon.centroid().y
 }
 
@@ -383,7 +365,11 @@ fn an_arch_under_a_point_load_stands_below_its_limit_load_and_collapses_above_it
                 }
             }
             // The ground is block 0.
-            drop_of(&s, 1 + loaded)
+            drop_of(
+                &s,
+                1 + loaded,
+                &format!("voussoir {loaded} at {share} of the limit"),
+            )
         };
         let (below, above) = (fall(0.97), fall(1.03));
         println!("voussoir {loaded}: limit {limit:.1} N/m, drops {below:.3e} m and {above:.3e} m");

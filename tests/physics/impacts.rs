@@ -12,6 +12,7 @@
 // A panic is how a test reports failure.
 #![allow(clippy::unwrap_used)]
 
+use crate::guarded;
 use dda::core::{Format, Model, RunOptions, Scene, Simulation, guard};
 
 /// Two 1 m squares 0.5 mm apart on a line, no gravity, frictionless, the left one
@@ -87,14 +88,6 @@ fixed = true
 
 const RIGID: &str = "deformable = false";
 const NO_ELASTICITY: &str = "";
-
-fn guarded(model: Model) -> Simulation {
-    let options = RunOptions {
-        stop_on_violation: true,
-        ..RunOptions::default()
-    };
-    Simulation::new(model, options)
-}
 
 /// Kinetic plus strain energy of the free blocks, J/m.
 fn mechanical(sim: &Simulation) -> f64 {

@@ -19,3 +19,15 @@ mod rolling;
 mod seismic;
 mod stacks;
 mod statics;
+
+use dda::core::{Model, RunOptions, Simulation};
+
+/// A simulation of `model` under the physics guard: a step that creates energy beyond
+/// 1% of the reference, or penetrates beyond d_tol, is an error.
+pub(crate) fn guarded(model: Model) -> Simulation {
+    let options = RunOptions {
+        stop_on_violation: true,
+        ..RunOptions::default()
+    };
+    Simulation::new(model, options)
+}

@@ -9,7 +9,8 @@
 // A panic is how a test reports failure.
 #![allow(clippy::unwrap_used)]
 
-use dda::core::{Format, RunOptions, Scene, Simulation};
+use crate::guarded;
+use dda::core::{Format, Scene};
 use std::f64::consts::PI;
 
 /// Gravity, m/s^2.
@@ -88,11 +89,7 @@ vertices = [{v}]
     );
     let (_, model) = Scene::parse(&text, Format::Toml, "wheel.toml").unwrap();
     let x0 = model.blocks[1].polygon.centroid().x;
-    let options = RunOptions {
-        stop_on_violation: true,
-        ..RunOptions::default()
-    };
-    let mut sim = Simulation::new(model, options);
+    let mut sim = guarded(model);
     sim.run(|_, _| {})
         .unwrap_or_else(|e| panic!("{n} vertices: {e}"));
     sim.blocks()[1].polygon.centroid().x - x0

@@ -9,7 +9,7 @@ use crate::scene::{
     invalid,
 };
 use crate::seismic::{GroundMotion, check_samples};
-use dda_geom::{ConvexPolygon, DVec2, PolygonError, PolygonOptions, separation};
+use dda_geom::{ConvexPolygon, DVec2, Groups, PolygonError, PolygonOptions, separation};
 use std::borrow::Cow;
 use std::collections::BTreeMap;
 
@@ -1412,27 +1412,19 @@ impl Model {
     /// parts joining others splits a body into the pieces left, and a part it leaves
     /// joined to none is a block on its own.
     pub fn bodies(&self, removed: &[bool]) -> Vec<Option<u32>> {
-        let mut root: Vec<u32> = (0..self.blocks.len() as u32).collect();
-        fn find(root: &mut [u32], mut i: u32) -> u32 {
-            while root[i as usize] != i {
-                root[i as usize] = root[root[i as usize] as usize];
-                i = root[i as usize];
-            }
-            i
-        }
+        let mut groups = Groups::new(self.blocks.len());
         let mut joined = vec![false; self.blocks.len()];
         for &[i, j] in &self.seams {
-            if removed[i as usize] || removed[j as usize] {
+            let (i, j) = (i as usize, j as usize);
+            if removed[i] || removed[j] {
                 continue;
             }
-            let (ri, rj) = (find(&mut root, i), find(&mut root, j));
-            // The smaller index is the root, so the label is the component's first part.
-            root[ri.max(rj) as usize] = ri.min(rj);
-            joined[i as usize] = true;
-            joined[j as usize] = true;
+            groups.join(i, j);
+            joined[i] = true;
+            joined[j] = true;
         }
-        (0..self.blocks.len() as u32)
-            .map(|i| joined[i as usize].then(|| find(&mut root, i)))
+        (0..self.blocks.len())
+            .map(|i| joined[i].then(|| groups.of(i) as u32))
             .collect()
     }
 

@@ -50,13 +50,12 @@ fn family(
             format!("must be a positive distance in m, got {}", s.spacing),
         ));
     }
-    let normal = JointSet {
+    let mut set = JointSet {
         dip_deg: s.dip_deg,
         spacing: s.spacing,
         offset: 0.0,
-    }
-    .normal();
-    let offset = match (s.offset, s.through) {
+    };
+    set.offset = match (s.offset, s.through) {
         (Some(_), Some(_)) => {
             return Err(invalid(
                 format!("{key}.through"),
@@ -70,7 +69,7 @@ fn family(
                     limits::COORDINATE.message(c),
                 ));
             }
-            normal.dot(DVec2::from(p))
+            set.normal().dot(DVec2::from(p))
         }
         (offset, None) => {
             let offset = offset.unwrap_or(0.0);
@@ -140,11 +139,7 @@ fn family(
         (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3)
     });
     Ok(JointFamily {
-        set: JointSet {
-            dip_deg: s.dip_deg,
-            spacing: s.spacing,
-            offset,
-        },
+        set,
         spacing_cv,
         dip_spread_deg,
         trace,
