@@ -1338,8 +1338,8 @@ fn the_step_respects_the_motion_it_starts_with() {
     assert!(v.abs() < 0.01, "still moving at {v} m/s");
 }
 
-/// A factor too large for the memory allowed is an error (exit 1) with the estimate
-/// and the system's size, not an abort.
+/// A factor too large for the memory allowed is an error (exit 1) with the estimate,
+/// the system's size and the solve that needs no factor, not an abort.
 #[test]
 fn a_factor_too_large_for_memory_exits_1_with_the_estimate() {
     let dir = scratch("memory");
@@ -1348,7 +1348,9 @@ fn a_factor_too_large_for_memory_exits_1_with_the_estimate() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(
-        err.contains("needs about") && err.contains("unknowns"),
+        err.contains("needs about")
+            && err.contains("unknowns")
+            && err.contains("solver = \"iterative\""),
         "{err}"
     );
     assert_eq!(summary(&out)["status"], "failed");

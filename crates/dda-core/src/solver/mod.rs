@@ -59,7 +59,8 @@ pub enum SolveError {
     /// The factor of the global matrix would not fit in the memory allowed.
     #[error(
         "the factor of the global matrix ({unknowns} unknowns) needs about {}, more than \
-         the {} allowed (the memory available, or --max-memory)",
+         the {} allowed (the memory available, or --max-memory); `analysis.solver = \
+         \"iterative\"` solves it without a factor, in memory linear in the blocks",
         bytes(*needed),
         bytes(*allowed)
     )]
