@@ -32,6 +32,11 @@ fn scenes() -> Vec<Scene> {
     impacts.name = "quake-impact-steps".into();
     impacts.analysis.impact_steps = Some(10);
     v.push(impacts);
+    // So does the damped rule.
+    let mut damped = Scene::load(Path::new(QUAKE)).unwrap().0;
+    damped.name = "quake-damped".into();
+    damped.analysis.integration = Some(dda_core::scene::Integration::DampedConstantAcceleration);
+    v.push(damped);
     for name in ["paper-5.1a-column-20", "paper-4.1-sharp-corners"] {
         v.push(dda_bench::builtin(name).unwrap());
     }

@@ -130,7 +130,7 @@ impl Simulation {
         let active = p.contact_damping > 0.0
             && p.mode == Mode::Dynamic
             && p.integration != Integration::AverageAcceleration
-            && self.step_rule() == StepRule::Constant;
+            && self.step_rule().viscous();
         let dt = self.scratch.attempt_dt;
         let dash = &mut self.scratch.dashpots;
         dash.scale = if active {
@@ -667,8 +667,8 @@ pub(crate) fn joint_of(
 /// its stiffness (inertia, elasticity, fixed-point springs), right-hand side (inertia,
 /// initial stress, gravity, point loads, fixed points) and mass matrix M (each only if
 /// its effect is on). Inertia is 2/dt^2 M and 2/dt M V under the constant-acceleration
-/// rule, 4/dt^2 M and M (4/dt V + A) under the average-acceleration one (see
-/// [`StepRule`]).
+/// rule, 16/(9 dt^2) M and M (16/(9 dt) V - A / 9) under the damped one, 4/dt^2 M and
+/// M (4/dt V + A) under the average-acceleration one (see [`StepRule`]).
 pub(crate) fn block_terms(
     model: &Model,
     eff: Effects,
@@ -698,6 +698,16 @@ pub(crate) fn block_terms(
                     .map(|bb| mass[a][bb] * (c1 * b.velocity[bb] + b.acceleration[bb]))
                     .sum::<f64>();
             }
+        } else if rule == StepRule::Damped {
+            // M a with a = (D - V dt - (1/2 - beta) A dt^2) / (beta dt^2): its part
+            // without D goes to the right-hand side.
+            let c1 = 1.0 / (DAMPED_BETA * dt);
+            let ca = (0.5 - DAMPED_BETA) / DAMPED_BETA;
+            for a in 0..6 {
+                f[a] += (0..6)
+                    .map(|bb| mass[a][bb] * (c1 * b.velocity[bb] + ca * b.acceleration[bb]))
+                    .sum::<f64>();
+            }
         } else {
             let c1 = 2.0 / dt;
             for a in 0..6 {
@@ -711,7 +721,7 @@ pub(crate) fn block_terms(
         // viscous stress beta C e' at the step's mean strain rate e' = strain / dt, in a
         // dynamic step under Shi's rule (the average-acceleration rule, which an impact
         // resolved in time takes, keeps every energy: docs/method.md section 12).
-        let viscous = if p.mode == Mode::Dynamic && rule == StepRule::Constant {
+        let viscous = if p.mode == Mode::Dynamic && rule.viscous() {
             mat.damping
                 .unwrap_or_else(|| own_damping(&mass, m.area, &e))
                 / dt
@@ -762,43 +772,78 @@ pub(crate) fn block_terms(
 }
 
 /// The rule a step integrates by: Shi's constant acceleration (D = V dt + a dt^2 / 2,
-/// V' = V + a dt, a from the end of the step's forces), or Newmark's average
-/// acceleration (D = V dt + (A + a) dt^2 / 4, V' = V + (A + a) dt / 2, A the last
-/// step's). Both give V' = 2 D / dt - V.
+/// V' = V + a dt, a from the end of the step's forces), the same with its stiff modes
+/// damped (D = V dt + (9 a - A) dt^2 / 16, V' = V + a dt, A the last step's
+/// acceleration), or Newmark's average acceleration (D = V dt + (A + a) dt^2 / 4,
+/// V' = V + (A + a) dt / 2). Shi's and the average give V' = 2 D / dt - V.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum StepRule {
     /// Shi's constant acceleration (and every static step).
     Constant,
+    /// Shi's with its stiff modes damped: Newmark's gamma = 1, beta = 9/16.
+    Damped,
     /// Newmark's average acceleration.
     Average,
 }
 
+/// Newmark's beta of the damped rule: with gamma = 1, beta = (gamma + 1/2)^2 / 4 keeps
+/// a third of an infinitely stiff mode a step (docs/method.md section 12).
+const DAMPED_BETA: f64 = 9.0 / 16.0;
+
 impl StepRule {
     /// The factor c of the inertia term c M of a step of size `dt` under this rule:
-    /// 2 / dt^2 (constant acceleration) or 4 / dt^2 (average acceleration).
+    /// 2 / dt^2 (constant acceleration), 1 / (beta dt^2) (damped) or 4 / dt^2 (average
+    /// acceleration).
     pub(crate) fn inertia_factor(self, dt: f64) -> f64 {
         let c = match self {
             StepRule::Constant => 2.0,
+            StepRule::Damped => 1.0 / DAMPED_BETA,
             StepRule::Average => 4.0,
         };
         c / (dt * dt)
     }
+
+    /// Whether the dashpots of the contacts and the damping of the blocks' strain act in
+    /// a dynamic step under this rule: Shi's and its damped form (the average-acceleration
+    /// rule keeps every energy).
+    pub(crate) fn viscous(self) -> bool {
+        self != StepRule::Average
+    }
+
+    /// The acceleration of a step under the damped rule that moved an unknown by `d`,
+    /// from velocity `v` and the last step's acceleration `a`, in a step of `dt`:
+    /// D = V dt + ((1/2 - beta) A + beta a) dt^2 solved for a.
+    pub(crate) fn damped_acceleration(d: f64, v: f64, a: f64, dt: f64) -> f64 {
+        (d - v * dt - (0.5 - DAMPED_BETA) * a * dt * dt) / (DAMPED_BETA * dt * dt)
+    }
+
+    /// The velocity at the end of a dynamic step under this rule that moved an unknown
+    /// by `d`, from velocity `v` and the last step's acceleration `a` (read by the
+    /// damped rule only).
+    pub(crate) fn end_velocity(self, d: f64, v: f64, a: f64, dt: f64) -> f64 {
+        match self {
+            StepRule::Damped => v + Self::damped_acceleration(d, v, a, dt) * dt,
+            StepRule::Constant | StepRule::Average => 2.0 * d / dt - v,
+        }
+    }
 }
 
 impl Simulation {
-    /// The rule of the next step: the average-acceleration rule when the scene asks for
-    /// it (throughout, or in the steps an impact holds down, as the step set out),
-    /// the analysis is dynamic and the blocks' accelerations are known (from a step
-    /// taken); else the constant-acceleration rule.
+    /// The rule of the next step: the average-acceleration rule or the damped one when
+    /// the scene asks for it (throughout, or in the steps an impact holds down, as the
+    /// step set out), the analysis is dynamic and the blocks' accelerations are known
+    /// (from a step taken); else the constant-acceleration rule.
     pub(crate) fn step_rule(&self) -> StepRule {
         let p = &self.model.params;
         let asked = match p.integration {
-            Integration::ConstantAcceleration => false,
-            Integration::AverageAcceleration => true,
-            Integration::AverageInImpacts => self.scratch.in_impact,
+            Integration::ConstantAcceleration => StepRule::Constant,
+            Integration::DampedConstantAcceleration => StepRule::Damped,
+            Integration::AverageAcceleration => StepRule::Average,
+            Integration::AverageInImpacts if self.scratch.in_impact => StepRule::Average,
+            Integration::AverageInImpacts => StepRule::Constant,
         };
-        if asked && p.mode == Mode::Dynamic && self.state.accelerations_known {
-            StepRule::Average
+        if p.mode == Mode::Dynamic && self.state.accelerations_known {
+            asked
         } else {
             StepRule::Constant
         }

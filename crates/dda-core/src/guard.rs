@@ -185,6 +185,7 @@ impl Simulation {
         let (max_pen, deepest) = self.deepest_contact();
         let p = &self.model.params;
         let dynamic = p.mode == Mode::Dynamic;
+        let rule = self.step_rule();
         let gravity = self.gravity();
         let (mut mechanical, mut work) = (0.0, 0.0);
         let mut gains = std::mem::take(&mut self.scratch.gains);
@@ -200,7 +201,9 @@ impl Simulation {
             let mass = &self.scratch.mass[f];
             let area = mass[0][0] / mat.density;
             let ke = if dynamic {
-                let v: Vec6 = std::array::from_fn(|a| 2.0 * d[a] / dt - b.velocity[a]);
+                let v: Vec6 = std::array::from_fn(|a| {
+                    rule.end_velocity(d[a], b.velocity[a], b.acceleration[a], dt)
+                });
                 kinetic(mass, &v)
             } else {
                 0.0

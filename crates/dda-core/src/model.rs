@@ -148,7 +148,7 @@ impl Scene {
     /// A warning where the scene writes a free block smaller than d_tol^2 wedged among
     /// others (touching another as written, within `glue_reach`; not a part of a body,
     /// whose seams glue it): contact detection at d_tol does not resolve it, and such a sliver
-    /// between stiffer blocks can spin up numerically and hold every step
+    /// between stiffer blocks can spin up numerically and hold every step under Shi's rule
     /// (docs/method.md section 10, where a region drops such pieces by default). A small
     /// block thrown at others (the paper's hard cases) is not warned of. Names the
     /// first, with how many more there are.
@@ -195,13 +195,19 @@ impl Scene {
             0 => String::new(),
             n => format!(" ({n} more blocks are)"),
         };
+        // The damped rule keeps at most a third of such a sliver's spin a step.
+        let spin = if model.params.integration == Integration::DampedConstantAcceleration {
+            "; leave it out, or make it part of a neighbour"
+        } else {
+            ", and a sliver between stiffer blocks can spin up numerically and hold every \
+             step of the run; leave it out, make it part of a neighbour, or take \
+             `analysis.integration = \"damped-constant-acceleration\"`, which damps that spin"
+        };
         Some(invalid(
             format!("blocks[{i}].vertices"),
             format!(
                 "block `{}` is {area:.3e} m^2, smaller than d_tol^2 ({:.3e} m^2){more}: contact \
-                 detection does not resolve it, and a sliver between stiffer blocks can spin \
-                 up numerically and hold every step of the run; leave it out, or make it part \
-                 of a neighbour",
+                 detection does not resolve it{spin}",
                 self.blocks[i].id,
                 d_tol * d_tol
             ),

@@ -93,9 +93,10 @@ pub struct BlockState {
     pub loads: Vec<(DVec2, DVec2)>,
     /// Fixed points: current material point, its fixed place.
     pub fixed_points: Vec<(DVec2, DVec2)>,
-    /// Acceleration at the end of the last step (rates of the velocity's components),
-    /// which the average-acceleration rule carries into the next step; zero under the
-    /// constant-acceleration rule, which does not need it.
+    /// Acceleration of the last step (rates of the velocity's components), which the
+    /// average-acceleration and damped rules carry into the next step (the first its
+    /// end's, the second the step's own); zero under the constant-acceleration rule,
+    /// which does not need it.
     pub acceleration: Vec6,
 }
 
@@ -123,8 +124,8 @@ pub struct RunState {
     /// What has come of each bolt.
     pub bolts: Vec<crate::bolts::BoltState>,
     /// Whether the blocks' accelerations are those of a step taken (the
-    /// average-acceleration rule takes its first step by the constant-acceleration one,
-    /// which needs none).
+    /// average-acceleration and damped rules take their first step by the
+    /// constant-acceleration one, which needs none).
     pub accelerations_known: bool,
     /// Whether the blocks have been settled before the run (`analysis.settle`), or the
     /// run has gone past where they would be.

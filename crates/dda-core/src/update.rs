@@ -39,10 +39,11 @@ impl Simulation {
             }
         }
         let dynamic = model.params.mode == Mode::Dynamic;
-        // The average-acceleration rule carries each block's acceleration: that of the
-        // step just taken, by the rule it was taken by.
+        // The average-acceleration and damped rules carry each block's acceleration: that
+        // of the step just taken, by the rule it was taken by.
         let carry = dynamic && model.params.integration != Integration::ConstantAcceleration;
-        let average = self.step_rule() == StepRule::Average;
+        let rule = self.step_rule();
+        let average = rule == StepRule::Average;
         // Where the step's system left the rule's, by block (`w`): the forces it took
         // back from the accelerations carried in (contacts released since its start,
         // `Simulation::release`), less the shares of the end forces of contacts that
@@ -107,6 +108,13 @@ impl Simulation {
             // Cannot fail: every motion was checked above.
             b.polygon.displace(c, &d).map_err(|_| inverted(i))?;
             for v in 0..6 {
+                if rule == StepRule::Damped {
+                    let a =
+                        StepRule::damped_acceleration(d[v], b.velocity[v], b.acceleration[v], dt);
+                    b.acceleration[v] = a;
+                    b.velocity[v] += a * dt;
+                    continue;
+                }
                 if carry {
                     let change = d[v] - b.velocity[v] * dt;
                     b.acceleration[v] = if average {

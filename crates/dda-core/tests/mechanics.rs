@@ -6,7 +6,7 @@
 // A panic is how a test reports failure.
 #![allow(clippy::unwrap_used)]
 
-use dda_core::scene::{Analysis, BlockSpec, Joint, Material, Mode, Plane};
+use dda_core::scene::{Analysis, BlockSpec, Integration, Joint, Material, Mode, Plane};
 use dda_core::{RunOptions, Scene, Simulation, Summary};
 use std::collections::BTreeMap;
 
@@ -79,6 +79,29 @@ fn rect(id: &str, x0: f64, y0: f64, w: f64, h: f64) -> BlockSpec {
     )
 }
 
+/// A scene of `blocks` alone (no regions, bolts, measured points or ground motion).
+fn scene(
+    name: &str,
+    analysis: Analysis,
+    materials: BTreeMap<String, Material>,
+    joints: BTreeMap<String, Joint>,
+    blocks: Vec<BlockSpec>,
+) -> Scene {
+    Scene {
+        name: name.into(),
+        analysis,
+        materials,
+        joints,
+        blocks,
+        joint_sets: Default::default(),
+        regions: Vec::new(),
+        excavations: Vec::new(),
+        bolts: Vec::new(),
+        measure: Vec::new(),
+        seismic: None,
+    }
+}
+
 fn run(scene: &Scene) -> Simulation {
     let model = scene.validate().expect("valid scene");
     let mut sim = Simulation::new(model, RunOptions::default());
@@ -100,19 +123,7 @@ fn free_fall_is_exact() {
     a.gravity = Some([0.0, -9.81]);
     let mut b = rect("b", 0.0, 0.0, 1.0, 0.5);
     b.velocity = Some([1.5, 2.0]);
-    let scene = Scene {
-        name: "free-fall".into(),
-        analysis: a,
-        materials: rock(2600.0, 1e9),
-        joints: BTreeMap::new(),
-        blocks: vec![b],
-        joint_sets: Default::default(),
-        regions: Vec::new(),
-        excavations: Vec::new(),
-        bolts: Vec::new(),
-        measure: Vec::new(),
-        seismic: None,
-    };
+    let scene = scene("free-fall", a, rock(2600.0, 1e9), BTreeMap::new(), vec![b]);
     let sim = run(&scene);
     let t = sim.time();
     assert_eq!(t, 1.0);
@@ -136,6 +147,64 @@ fn free_fall_is_exact() {
 
 /// A fixed incline at `deg` and a unit square resting on it, both built from the same
 /// unit vectors so that the slider starts exactly touching.
+/// One unknown of a step's motion under Newmark's gamma = 1 and `beta` (Shi's rule at
+/// 1/2) for a mass `m` on a spring `k` at `x`, moving at `v` with the last step's
+/// acceleration `a`: the new (x, v, a). Written from the rule's two equations,
+/// D = V dt + ((1/2 - beta) A + beta a) dt^2 and V' = V + a dt, with m a = -k (x + D).
+fn newmark_step(beta: f64, m: f64, k: f64, dt: f64, [x, v, a]: [f64; 3]) -> [f64; 3] {
+    let inertia = m / (beta * dt * dt);
+    let past = v * dt + (0.5 - beta) * a * dt * dt;
+    let d = (inertia * past - k * x) / (inertia + k);
+    let acc = (d - past) / (beta * dt * dt);
+    [x + d, v + acc * dt, acc]
+}
+
+/// A rigid block held at its centroid by a fixed point's spring far stiffer than its
+/// inertia over a step (w dt = 20), set moving at 1 m/s. Its motion follows the rule's
+/// own recursion (`newmark_step`, the first step by Shi's rule, no acceleration known)
+/// to rounding: a few times 1e-16 of the solve's terms, grown by at most w dt^2 = 400
+/// where they cancel, over 20 steps, far below 1e-9 m/s. The recursion's spectral
+/// radius at w dt = 20 (docs/method.md section 12) is 0.98 under Shi's rule (the
+/// velocity flips sign from step to step; 0.98^20 = 0.67 of it left, more than half)
+/// and 0.34 under the damped rule (0.34^19 = 1.2e-9 after its first step, times a
+/// modal factor of order one: below 1e-6 of the start).
+#[test]
+fn a_stiff_mode_keeps_its_velocity_under_shi_s_rule_and_loses_it_under_the_damped_one() {
+    let (m, k, w_dt): (f64, f64, f64) = (1000.0, 1e10, 20.0);
+    let dt = w_dt / (k / m).sqrt();
+    for (integration, beta) in [
+        (Integration::ConstantAcceleration, 0.5),
+        (Integration::DampedConstantAcceleration, 9.0 / 16.0),
+    ] {
+        let mut a = analysis(20.5 * dt, dt, 1.0, 1e9);
+        a.deformable = false;
+        a.fixed_penalty = Some(k);
+        a.integration = Some(integration);
+        let mut b = rect("held", 0.0, 0.0, 1.0, 1.0);
+        b.velocity = Some([1.0, 0.0]);
+        b.fixed_points = vec![[0.5, 0.5]];
+        let scene = scene("held", a, rock(m, 1e10), BTreeMap::new(), vec![b]);
+        let mut sim = Simulation::new(scene.validate().unwrap(), RunOptions::default());
+        let mut own = [0.0, 1.0, 0.0];
+        for step in 0..20 {
+            let r = sim.step().unwrap();
+            assert_eq!(r.dt, dt, "{integration:?}: step {step} of {} s", r.dt);
+            own = newmark_step(if step == 0 { 0.5 } else { beta }, m, k, dt, own);
+            let v = sim.blocks()[0].velocity[0];
+            assert!(
+                (v - own[1]).abs() < 1e-9,
+                "{integration:?}, step {step}: {v} m/s against the rule's {}",
+                own[1]
+            );
+        }
+        let left = own[1].abs();
+        match integration {
+            Integration::ConstantAcceleration => assert!(left > 0.5, "Shi's rule: {left}"),
+            _ => assert!(left < 1e-6, "damped: {left}"),
+        }
+    }
+}
+
 fn incline_scene(deg: f64, friction_deg: f64) -> (Scene, glam::DVec2) {
     let (s, c) = deg.to_radians().sin_cos();
     let u = glam::DVec2::new(c, s);
@@ -149,19 +218,13 @@ fn incline_scene(deg: f64, friction_deg: f64) -> (Scene, glam::DVec2) {
     let slider = block("slider", &[p(0.0 * u), p(u), p(u + n), p(n)]);
     let mut a = analysis(1.0, 0.001, 0.005, 1e9);
     a.gravity = Some([0.0, -9.81]);
-    let scene = Scene {
-        name: "incline".into(),
-        analysis: a,
-        materials: rock(2600.0, 1e9),
-        joints: joint(friction_deg),
-        blocks: vec![base, slider],
-        joint_sets: Default::default(),
-        regions: Vec::new(),
-        excavations: Vec::new(),
-        bolts: Vec::new(),
-        measure: Vec::new(),
-        seismic: None,
-    };
+    let scene = scene(
+        "incline",
+        a,
+        rock(2600.0, 1e9),
+        joint(friction_deg),
+        vec![base, slider],
+    );
     (scene, u)
 }
 
@@ -210,19 +273,13 @@ fn collision_scene() -> Scene {
     let mut b = rect("right", 1.05, 0.0, 1.0, 1.0);
     a.velocity = Some([1.0, 0.0]);
     b.velocity = Some([-1.0, 0.0]);
-    Scene {
-        name: "collision".into(),
-        analysis: analysis(0.1, 0.005, 0.01, 1e12),
-        materials: rock(2600.0, 1e9),
-        joints: joint(0.0),
-        blocks: vec![a, b],
-        joint_sets: Default::default(),
-        regions: Vec::new(),
-        excavations: Vec::new(),
-        bolts: Vec::new(),
-        measure: Vec::new(),
-        seismic: None,
-    }
+    scene(
+        "collision",
+        analysis(0.1, 0.005, 0.01, 1e12),
+        rock(2600.0, 1e9),
+        joint(0.0),
+        vec![a, b],
+    )
 }
 
 fn momentum(sim: &Simulation) -> glam::DVec2 {
@@ -300,19 +357,7 @@ fn stack_of_ten_blocks_stands() {
     }
     let mut a = analysis(5.0, 0.01, 0.01, 1e10);
     a.gravity = Some([0.0, -9.81]);
-    let scene = Scene {
-        name: "stack".into(),
-        analysis: a,
-        materials: rock(2600.0, 1e10),
-        joints: joint(30.0),
-        blocks,
-        joint_sets: Default::default(),
-        regions: Vec::new(),
-        excavations: Vec::new(),
-        bolts: Vec::new(),
-        measure: Vec::new(),
-        seismic: None,
-    };
+    let scene = scene("stack", a, rock(2600.0, 1e10), joint(30.0), blocks);
     let starts: Vec<_> = scene
         .validate()
         .unwrap()
