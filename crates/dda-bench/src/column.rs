@@ -2,7 +2,7 @@
 //! fixed base, under gravity.
 
 use dda_core::Scene;
-use dda_core::scene::{Analysis, BlockSpec, Joint, Material, Mode, Plane};
+use dda_core::scene::{Analysis, BlockSpec, Integration, Joint, Material, Mode, Plane};
 use dda_geom::{
     ConvexPolygon, DVec2, JointSet, JointSetError, PolygonError, cut_by_joint_sets, shapes,
 };
@@ -92,7 +92,9 @@ pub fn column_scene(name: &str, blocks: &[ConvexPolygon], analysis: Analysis) ->
 }
 
 /// The paper's analysis settings (Tables 1-3): dynamic, max rotation 2 deg, the cover
-/// detector, deformable blocks in plane stress, at most 6 OCI iterations, 10 frames.
+/// detector, deformable blocks in plane stress, at most 6 OCI iterations, 10 frames,
+/// Shi's constant-acceleration rule (the paper's DDA; not the default, which damps
+/// stiff modes: docs/method.md section 12).
 pub fn paper_analysis(
     duration: f64,
     time_step: f64,
@@ -118,7 +120,7 @@ pub fn paper_analysis(
         max_oci: 6,
         frames: 10,
         impact_steps: None,
-        integration: None,
+        integration: Some(Integration::ConstantAcceleration),
         settle: Some(false),
         solver: None,
         contact_damping: Some(0.0),

@@ -33,8 +33,9 @@ pub const CHECKPOINT_MAGIC: [u8; 8] = *b"DDA-CKPT";
 /// the same record, under a contact law whose sliding contacts kept from locking slide
 /// back where their motion reversed, and glue whose seam ends hold past their edges'
 /// ends. Version 9: the same record, but a scene without `analysis.contact_damping` now
-/// damps its contacts' normal springs.
-pub const CHECKPOINT_VERSION: u32 = 9;
+/// damps its contacts' normal springs. Version 10: the same record, but a scene without
+/// `analysis.integration` now steps by the damped rule.
+pub const CHECKPOINT_VERSION: u32 = 10;
 
 /// Length of the header before the payload.
 const HEADER_LEN: usize = 24;

@@ -1094,7 +1094,7 @@ impl Analysis {
         let integration = self.integration.unwrap_or(if self.impact_steps.is_some() {
             Integration::AverageInImpacts
         } else {
-            Integration::ConstantAcceleration
+            Integration::DampedConstantAcceleration
         });
         Ok(Params {
             mode: self.mode,

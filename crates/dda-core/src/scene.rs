@@ -327,14 +327,16 @@ impl SolverChoice {
 pub enum Integration {
     /// Shi's: D = V dt + a dt^2 / 2 and V' = V + a dt with a from the forces at the
     /// step's end (Newmark's gamma = 1, beta = 1/2): unconditionally stable, and
-    /// dissipative most at w dt = 4, less beyond (docs/method.md section 12).
-    #[default]
+    /// dissipative most at w dt = 4, less beyond (docs/method.md section 12). The
+    /// paper's rule.
     ConstantAcceleration,
     /// Shi's rule with its stiff modes damped (Newmark's gamma = 1, beta = 9/16):
     /// D = V dt + (9 a - A) dt^2 / 16 and V' = V + a dt, A the last step's
     /// acceleration. As dissipative as Shi's where a motion is resolved in time, and a
     /// mode far stiffer than 1 / dt keeps at most a third of itself a step, where
-    /// under Shi's rule its velocity flips sign from step to step, hardly damped.
+    /// under Shi's rule its velocity flips sign from step to step, hardly damped. The
+    /// default.
+    #[default]
     DampedConstantAcceleration,
     /// Newmark's average acceleration (gamma = 1/2, beta = 1/4): D = V dt + (a + a')
     /// dt^2 / 4, V' = V + (a + a') dt / 2; conserves the energy of linear springs.

@@ -306,10 +306,10 @@ fn initial_stress_in_a_rigid_analysis_is_warned_of() {
 }
 
 /// A free block written smaller than d_tol^2 (here 1 mm square against d_tol = 2 mm) is
-/// warned of, naming it: contact detection does not resolve it, and such a sliver can
-/// spin up numerically under Shi's rule (the warning names the damped rule, and under it
-/// says no more of the spin). The scene still runs; one larger than d_tol^2 is not
-/// warned of.
+/// warned of, naming it: contact detection does not resolve it; under Shi's rule
+/// (`integration = "constant-acceleration"`) such a sliver can spin up numerically too,
+/// and the warning names the default, damped rule, which damps that spin. The scene
+/// still runs; one larger than d_tol^2 is not warned of.
 #[test]
 fn a_block_smaller_than_the_contact_tolerance_is_warned_of() {
     let chip = |size: f64| {
@@ -330,19 +330,22 @@ fn a_block_smaller_than_the_contact_tolerance_is_warned_of() {
     assert!(
         w.message.contains("`chip`")
             && w.message.contains("d_tol^2")
-            && w.message.contains("damped-constant-acceleration"),
+            && !w.message.contains("spin"),
         "{w:?}"
     );
-    // Under the damped rule the sliver is still unresolved, but no spin-up is foretold.
-    let damped = chip(0.001).replacen(
+    // Under Shi's rule the sliver can spin up too, and the damped rule is named.
+    let shi = chip(0.001).replacen(
         "[analysis]",
-        "[analysis]\nintegration = \"damped-constant-acceleration\"",
+        "[analysis]\nintegration = \"constant-acceleration\"",
         1,
     );
-    let (_, model) = Scene::parse(&damped, Format::Toml, "s.toml").expect("valid");
+    let (_, model) = Scene::parse(&shi, Format::Toml, "s.toml").expect("valid");
     assert_eq!(model.warnings.len(), 1, "{:?}", model.warnings);
     let w = &model.warnings[0].message;
-    assert!(w.contains("`chip`") && !w.contains("spin"), "{w}");
+    assert!(
+        w.contains("`chip`") && w.contains("spin") && w.contains("damped-constant-acceleration"),
+        "{w}"
+    );
     let (_, model) = Scene::parse(&chip(0.0025), Format::Toml, "s.toml").expect("valid");
     assert!(model.warnings.is_empty(), "{:?}", model.warnings);
 }
