@@ -189,12 +189,18 @@ fn check(name: &str) -> Result<ExitCode, Failure> {
     let free = model.blocks.iter().filter(|b| !b.fixed).count();
     let iterative = dda_core::iterative::solves_iteratively(model.params.solver, free);
     say(format_args!(
-        "{name}: ok: scene `{}`, {} blocks, detector {}, effects: {}, solve: {}",
+        "{name}: ok: scene `{}`, {} blocks, detector {}, effects: {}, solve: {}{}",
         model.name,
         model.blocks.len(),
         model.params.detector,
         effects.names().join(", "),
-        if iterative { "iterative" } else { "direct" }
+        if iterative { "iterative" } else { "direct" },
+        match model.params.mode {
+            dda_core::scene::Mode::Dynamic => {
+                format!(", integration: {}", model.params.integration.name())
+            }
+            dda_core::scene::Mode::Static => String::new(),
+        }
     ));
     Ok(ExitCode::SUCCESS)
 }

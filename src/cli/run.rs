@@ -504,6 +504,12 @@ impl Job {
                 "direct (sparse Cholesky factor, analysis.solver)"
             }
         );
+        if p.mode == dda_core::scene::Mode::Dynamic {
+            eprintln!(
+                "integration: {} (analysis.integration)",
+                p.integration.name()
+            );
+        }
         if self.marks.checkpoint_every > 0 {
             eprintln!(
                 "checkpoint every {} steps: {} (continue with `dda resume {}`)",

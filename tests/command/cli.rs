@@ -112,6 +112,8 @@ fn run_writes_summary_history_and_frames() {
     assert_eq!(s["scene"], "sliding-block");
     assert_eq!(s["source"], SCENE);
     assert_eq!(s["detector"], "cover");
+    // The scene names no rule: the default.
+    assert_eq!(s["integration"], "damped-constant-acceleration");
     assert_eq!(s["status"], "completed");
     assert_eq!(s["time_simulated"], 0.2);
     let report = std::fs::read_to_string(out.join("report.html")).unwrap();

@@ -321,6 +321,18 @@ impl SolverChoice {
     }
 }
 
+impl Integration {
+    /// The rule's name as a scene writes it (`analysis.integration`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Integration::ConstantAcceleration => "constant-acceleration",
+            Integration::DampedConstantAcceleration => "damped-constant-acceleration",
+            Integration::AverageAcceleration => "average-acceleration",
+            Integration::AverageInImpacts => "average-in-impacts",
+        }
+    }
+}
+
 /// How a dynamic step integrates the motion (docs/method.md section 12).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -788,5 +800,26 @@ mod exact {
         de: D,
     ) -> Result<Vec<[f64; N]>, D::Error> {
         Vec::<Exact<N>>::deserialize(de).map(|v| v.into_iter().map(|e| e.0).collect())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Integration;
+
+    /// Each rule's name is the one a scene writes, which serde reads.
+    #[test]
+    fn an_integration_rule_s_name_is_its_scene_key() {
+        for rule in [
+            Integration::ConstantAcceleration,
+            Integration::DampedConstantAcceleration,
+            Integration::AverageAcceleration,
+            Integration::AverageInImpacts,
+        ] {
+            let written = serde_json::to_string(&rule).unwrap_or_default();
+            assert_eq!(written, format!("\"{}\"", rule.name()));
+            let read: Result<Integration, _> = serde_json::from_str(&written);
+            assert_eq!(read.ok(), Some(rule));
+        }
     }
 }

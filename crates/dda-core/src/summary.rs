@@ -1,7 +1,7 @@
 //! The run summary (docs/outputs.md): the fields other tools read, plus a few more. Timing
 //! fields live under `seconds` so that comparisons of two runs can leave them out.
 
-use crate::scene::SolverChoice;
+use crate::scene::{Mode, SolverChoice};
 use crate::simulation::Simulation;
 use serde::{Deserialize, Serialize};
 
@@ -45,6 +45,10 @@ pub struct Summary {
     pub source: Option<String>,
     /// Detector name.
     pub detector: String,
+    /// The rule a dynamic analysis steps by (`analysis.integration`, named or the
+    /// default); absent for a static analysis.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub integration: Option<String>,
     /// Effects assembled.
     pub effects: Vec<String>,
     /// "completed", "failed" (the simulation could not go on, or broke physics),
@@ -187,6 +191,7 @@ impl Summary {
             scene: sim.model().name.clone(),
             source: None,
             detector: sim.detector_name().to_string(),
+            integration: (p.mode == Mode::Dynamic).then(|| p.integration.name().to_string()),
             effects: sim
                 .effects()
                 .names()

@@ -207,12 +207,15 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
     };
     let _ = writeln!(
         page,
-        r#"<p class="{status_class}" id="status">{}: {} s simulated in {} ({}), detector {}, {:.3} s wall.</p>"#,
+        r#"<p class="{status_class}" id="status">{}: {} s simulated in {} ({}), detector {}{}, {:.3} s wall.</p>"#,
         escape(&s.status),
         shown(s.time_simulated),
         counted(s.steps, "step"),
         counted(s.oci_iterations, "OCI iteration"),
         escape(&s.detector),
+        s.integration
+            .as_ref()
+            .map_or(String::new(), |r| format!(", integration {}", escape(r))),
         s.seconds.total
     );
     if let Some(f) = &s.failure {
