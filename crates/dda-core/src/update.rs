@@ -107,7 +107,15 @@ impl Simulation {
             let b = &mut self.state.blocks[i];
             // Cannot fail: every motion was checked above.
             b.polygon.displace(c, &d).map_err(|_| inverted(i))?;
+            // A rigid block's strain components are no unknowns: it carries no acceleration
+            // in them (the forces taken back have parts there, which its mass, solved in
+            // the block's own unknowns, does not turn into accelerations).
+            let nd = self.nd;
             for v in 0..6 {
+                if v >= nd {
+                    b.acceleration[v] = 0.0;
+                    continue;
+                }
                 if rule == StepRule::Damped {
                     let a =
                         StepRule::damped_acceleration(d[v], b.velocity[v], b.acceleration[v], dt);
