@@ -719,8 +719,9 @@ pub(crate) fn block_terms(
         let e = elasticity(mat.young, mat.poisson);
         // The material's damping (`materials.*.damping`, beta, or the block's own): a
         // viscous stress beta C e' at the step's mean strain rate e' = strain / dt, in a
-        // dynamic step under Shi's rule (the average-acceleration rule, which an impact
-        // resolved in time takes, keeps every energy: docs/method.md section 12).
+        // dynamic step under Shi's rule or its damped form (the average-acceleration
+        // rule, which an impact resolved in time takes, keeps every energy:
+        // docs/method.md section 12).
         let viscous = if p.mode == Mode::Dynamic && rule.viscous() {
             mat.damping
                 .unwrap_or_else(|| own_damping(&mass, m.area, &e))

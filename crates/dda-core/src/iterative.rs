@@ -72,8 +72,9 @@ pub fn settling_solver(choice: SolverChoice, n_free: usize) -> SolverChoice {
 impl Simulation {
     /// Solves the assembled system iteratively. At the attempt's first solve the start
     /// is each block's velocity times dt and the stop's data are made: each block's own
-    /// terms of K (its inertia c / dt^2 M, with c = 2 under Shi's rule and 4 under the
-    /// average acceleration, its elasticity and its fixed points: the lower bound of K
+    /// terms of K (its inertia c / dt^2 M, with c = 2 under Shi's rule, 16/9 under its
+    /// damped form and 4 under the average acceleration, its elasticity and its fixed
+    /// points: the lower bound of K
     /// the stop is stated in) and the largest reach of a vertex (see
     /// `solver::iterative`). Later solves of the attempt start from the last solution.
     pub(crate) fn solve_iteratively(&mut self) -> Iterated {
