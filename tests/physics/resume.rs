@@ -158,7 +158,8 @@ fn damaged_checkpoints_are_refused() {
     bad[8] = 99;
     let e = Checkpoint::from_bytes(&bad, path).unwrap_err();
     assert!(
-        matches!(e, CheckpointError::Version { found: 99, .. }),
+        matches!(e, CheckpointError::Version { found: 99, .. })
+            && e.to_string().contains("scene.json"),
         "{e}"
     );
 

@@ -72,7 +72,11 @@ pub enum CheckpointError {
         path: PathBuf,
     },
     /// The file is of another format version.
-    #[error("{path}: checkpoint format version {found}, this dda reads version {expected}")]
+    #[error(
+        "{path}: checkpoint format version {found}, this dda reads version {expected} (a \
+         run begun by another version goes on under other mechanics: run its scene.json \
+         again)"
+    )]
     Version {
         /// The file.
         path: PathBuf,
