@@ -195,12 +195,10 @@ fn check(name: &str) -> Result<ExitCode, Failure> {
         model.params.detector,
         effects.names().join(", "),
         if iterative { "iterative" } else { "direct" },
-        match model.params.mode {
-            dda_core::scene::Mode::Dynamic => {
-                format!(", integration: {}", model.params.integration.name())
-            }
-            dda_core::scene::Mode::Static => String::new(),
-        }
+        model
+            .params
+            .stepping_rule()
+            .map_or(String::new(), |r| format!(", integration: {}", r.name()))
     ));
     Ok(ExitCode::SUCCESS)
 }

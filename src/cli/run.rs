@@ -504,11 +504,8 @@ impl Job {
                 "direct (sparse Cholesky factor, analysis.solver)"
             }
         );
-        if p.mode == dda_core::scene::Mode::Dynamic {
-            eprintln!(
-                "integration: {} (analysis.integration)",
-                p.integration.name()
-            );
+        if let Some(rule) = p.stepping_rule() {
+            eprintln!("integration: {} (analysis.integration)", rule.name());
         }
         if self.marks.checkpoint_every > 0 {
             eprintln!(

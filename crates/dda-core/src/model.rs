@@ -1019,6 +1019,14 @@ pub struct Params {
     pub contact_damping: f64,
 }
 
+impl Params {
+    /// The rule a dynamic analysis steps by (`analysis.integration`, named or the
+    /// default); none for a static analysis, whose steps carry no motion.
+    pub fn stepping_rule(&self) -> Option<Integration> {
+        (self.mode == Mode::Dynamic).then_some(self.integration)
+    }
+}
+
 impl Analysis {
     fn validate(&self) -> Result<Params, Invalid> {
         let k = |s: &str| format!("analysis.{s}");

@@ -1,7 +1,7 @@
 //! The run summary (docs/outputs.md): the fields other tools read, plus a few more. Timing
 //! fields live under `seconds` so that comparisons of two runs can leave them out.
 
-use crate::scene::{Mode, SolverChoice};
+use crate::scene::SolverChoice;
 use crate::simulation::Simulation;
 use serde::{Deserialize, Serialize};
 
@@ -191,7 +191,7 @@ impl Summary {
             scene: sim.model().name.clone(),
             source: None,
             detector: sim.detector_name().to_string(),
-            integration: (p.mode == Mode::Dynamic).then(|| p.integration.name().to_string()),
+            integration: p.stepping_rule().map(|r| r.name().to_string()),
             effects: sim
                 .effects()
                 .names()
