@@ -462,7 +462,12 @@ pub fn run(out: &Path) -> Result<(), String> {
          d_max and 2.6e-5 to 4.8e-4 across the penalties. Measured again after the states of\n  \
          a scene with friction were predicted from the step's own matrix (2026-11-26,\n  \
          `docs/method.md` section 3): 4.7e-7 to 3.0e-5 across d_max and 3.0e-5 to 4.8e-4\n  \
-         across the penalties.\n\
+         across the penalties. Measured again after a sliding contact's friction force\n  \
+         that swings from trial to trial was set by regula falsi (2026-11-28,\n  \
+         `docs/method.md` section 6): 4.7e-7 to 6.4e-5 across d_max (the iteration stops\n  \
+         once every friction force is within a thousandth of its normal force's, and\n  \
+         where in that band it stops moves with the trials taken), the penalties' as\n  \
+         before.\n\
          - Rebound: the open-close iteration loses much of the energy of an impact. A\n  \
          contact carries its spring over whole steps and drops it, with the energy it\n  \
          holds, the step it opens; the stiffer the spring against the step (the contact\n  \
@@ -474,8 +479,8 @@ pub fn run(out: &Path) -> Result<(), String> {
          - The damped rule (the default since 2026-11-27: Shi's with its stiff modes\n  \
          damped, `docs/method.md` section 12), d_max varied: the free fall exact to\n  \
          rounding (its first step is Shi's, and the acceleration it carries is the\n  \
-         force's); the incline's error in Shi's range (3e-7 to 4e-5 against 5e-7 to\n  \
-         3e-5); the rebound, an impact taken in a step or two, loses as much (0.22 to 0.91\n  \
+         force's); the incline's error in Shi's range (3e-7 to 7e-5 against 5e-7 to\n  \
+         6e-5); the rebound, an impact taken in a step or two, loses as much (0.22 to 0.91\n  \
          of the height against 0.22 to 0.87). Without `impact_steps` its restitution in\n  \
          the impacts below is Shi's to 1% (0.7544 and 0.5026 against 0.7544 and 0.4970).\n\n",
     );

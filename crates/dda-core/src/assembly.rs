@@ -392,7 +392,14 @@ impl Simulation {
                         });
                     }
                     ContactState::Sliding if c.slide_dir != 0.0 => {
-                        let force = -c.slide_dir * share * self.friction_limit(&c, &j);
+                        // The force the open-close iteration set where friction swung
+                        // (`Simulation::relax_friction`), else the limit.
+                        let force = self
+                            .scratch
+                            .friction_trials
+                            .get(k)
+                            .and_then(|t| t.next(c.slide_dir))
+                            .unwrap_or_else(|| -c.slide_dir * share * self.friction_limit(&c, &j));
                         let (shapes, half) = (&self.scratch.shapes, &self.scratch.half);
                         let row =
                             self.scratch

@@ -78,6 +78,8 @@ impl Simulation {
     /// factorisations against 1,067 and 19% longer for 6% fewer OCI iterations, so
     /// frictionless scenes keep the last step's factor.
     pub(crate) fn predict_states(&mut self, rec: &mut StepRecord) -> Result<(), SimError> {
+        // The friction forces the last attempt's iteration set are not this step's.
+        self.scratch.friction_trials.clear();
         if self.scratch.system.is_iterative()
             || (self.effects.friction && self.state.totals.steps > 0)
         {
@@ -161,7 +163,13 @@ impl Simulation {
         // Each attempt counts its contacts' changes afresh (see `contact_law`).
         self.scratch.flips.clear();
         self.scratch.flips.resize(self.state.contacts.len(), 0);
+        self.scratch.friction_trials.clear();
+        self.scratch
+            .friction_trials
+            .resize(self.state.contacts.len(), FrictionTrial::NONE);
         let mut not_hard = 0;
+        // Whether the trial about to be solved has the contact states of the one before.
+        let mut same_states = false;
         for it in 1..=bound {
             if !self.solve_states(rec)? {
                 return Ok((false, it, not_hard));
@@ -177,6 +185,7 @@ impl Simulation {
                 });
             }
             let mut changed = self.update_states();
+            self.relax_friction(same_states);
             watch.lap(rec, Phase::Assembly);
             let activated = self.scratch.track_list.track(
                 self.detector.as_ref(),
@@ -188,6 +197,7 @@ impl Simulation {
                 self.set_up_new_active();
             }
             changed += activated;
+            same_states = changed == 0;
             watch.lap(rec, Phase::Detection);
             // From `max_oci` on, only changes at contacts with friction go on
             // (`OCI_GRACE`).
@@ -289,6 +299,45 @@ impl Simulation {
             self.released_share(k)
                 .is_some_and(|phi| moved(k, 1.0 - (1.0 - phi), 1.0 + f, force))
         })
+    }
+
+    /// Sets the friction force the next trial applies at each sliding contact whose
+    /// friction swings (docs/method.md section 6). A sliding contact's friction force
+    /// enters a trial as a force, the one its normal force in the trial before asks for;
+    /// where a trial's own normal force asks for more than it was solved with and the
+    /// trial before, solved with the same contact states, asked for less (or the other
+    /// way), the two trials bracket the friction force that agrees with its own normal
+    /// force, and the next trial takes it where the line through them crosses (regula
+    /// falsi), between the two. `same_states`: whether the trial just solved had the
+    /// contact states of the one before, so that only friction forces differed between
+    /// them. (Between trials of other states, a swing is the other changes', and the next
+    /// trial takes the force its normal force asks for, as before.)
+    fn relax_friction(&mut self, same_states: bool) {
+        let carried = self.step_rule() == crate::assembly::StepRule::Average;
+        let mut trials = std::mem::take(&mut self.scratch.friction_trials);
+        for &(k, used, _) in &self.scratch.forces {
+            let k = k as usize;
+            let c = self.state.contacts.contacts[k];
+            let j = self.joint(k);
+            let Some(t) = trials.get_mut(k) else {
+                continue;
+            };
+            let sliding = c.active && c.state == ContactState::Sliding && c.slide_dir != 0.0;
+            if !(sliding && j.has_shear()) {
+                *t = FrictionTrial::NONE;
+                continue;
+            }
+            let share = if carried { self.engaged(k) } else { 1.0 };
+            let residual = -c.slide_dir * share * self.friction_limit(&c, &j) - used;
+            t.next = if same_states && t.residual * residual < 0.0 {
+                used - residual * (used - t.used) / (residual - t.residual)
+            } else {
+                f64::NAN
+            };
+            t.used = used;
+            t.residual = residual;
+        }
+        self.scratch.friction_trials = trials;
     }
 
     /// Whether the current trial moves a sliding contact's friction force from the one
@@ -470,6 +519,33 @@ impl Simulation {
                 self.state.contacts.contacts[k].state = ContactState::Sliding;
             }
         }
+    }
+}
+
+/// A sliding contact's last friction trial in the open-close iteration
+/// ([`Simulation::relax_friction`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct FrictionTrial {
+    /// The friction force the trial was solved with, N (signed along the shear row).
+    used: f64,
+    /// The force its normal force in the trial asked for, less `used`, N.
+    residual: f64,
+    /// The force the next trial takes, N; NaN: the one its normal force asks for.
+    next: f64,
+}
+
+impl FrictionTrial {
+    /// No trial.
+    pub(crate) const NONE: FrictionTrial = FrictionTrial {
+        used: f64::NAN,
+        residual: f64::NAN,
+        next: f64::NAN,
+    };
+
+    /// The force the next trial takes at a contact sliding in direction `dir`, where
+    /// the iteration set one that resists that direction.
+    pub(crate) fn next(&self, dir: f64) -> Option<f64> {
+        (self.next.is_finite() && -dir * self.next >= 0.0).then_some(self.next)
     }
 }
 

@@ -147,6 +147,9 @@ pub(crate) struct Scratch {
     pub(crate) opened_or_closed: usize,
     /// Changes of state of each contact in this attempt's open-close iteration.
     pub(crate) flips: Vec<u8>,
+    /// Each contact's last friction trial in this attempt's open-close iteration
+    /// (`Simulation::relax_friction`).
+    pub(crate) friction_trials: Vec<crate::open_close::FrictionTrial>,
     /// Each block's force scale for the contact law's decisions: the larger of the
     /// external force on it (weight and point loads) and the largest normal force of its
     /// closed contacts at the step's start; infinite for a fixed block.
@@ -374,6 +377,7 @@ impl Simulation {
                 frictionless_changes: 0,
                 opened_or_closed: 0,
                 flips: Vec::new(),
+                friction_trials: Vec::new(),
                 force_scale: Vec::new(),
                 dashpots: Default::default(),
                 diagnosis: None,
