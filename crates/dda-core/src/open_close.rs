@@ -185,7 +185,7 @@ impl Simulation {
                 });
             }
             let mut changed = self.update_states();
-            self.relax_friction(same_states);
+            changed -= self.relax_friction(same_states);
             watch.lap(rec, Phase::Assembly);
             let activated = self.scratch.track_list.track(
                 self.detector.as_ref(),
@@ -302,42 +302,72 @@ impl Simulation {
     }
 
     /// Sets the friction force the next trial applies at each sliding contact whose
-    /// friction swings (docs/method.md section 6). A sliding contact's friction force
-    /// enters a trial as a force, the one its normal force in the trial before asks for;
-    /// where a trial's own normal force asks for more than it was solved with and the
+    /// friction swings (docs/method.md section 6), and returns how many contacts it kept
+    /// sliding against the contact law's decision. A sliding contact's friction force
+    /// enters a trial as a force, the one its normal force in the trial before asks for.
+    /// Where a trial's own normal force asks for more than it was solved with and the
     /// trial before, solved with the same contact states, asked for less (or the other
     /// way), the two trials bracket the friction force that agrees with its own normal
     /// force, and the next trial takes it where the line through them crosses (regula
-    /// falsi), between the two. `same_states`: whether the trial just solved had the
-    /// contact states of the one before, so that only friction forces differed between
-    /// them. (Between trials of other states, a swing is the other changes', and the next
-    /// trial takes the force its normal force asks for, as before.)
-    fn relax_friction(&mut self, same_states: bool) {
+    /// falsi), between the two. A contact the trial turned back and the contact law
+    /// locked at its reversal is kept sliding where the two trials bracket its friction
+    /// so: it turned back under a friction force its own normal force does not carry, a
+    /// force the next trial takes down. `same_states`: whether the trial just solved had
+    /// the contact states of the one before, so that only friction forces differed
+    /// between them. (Between trials of other states, a swing is the other changes', and
+    /// the next trial takes the force its normal force asks for, as before.)
+    fn relax_friction(&mut self, same_states: bool) -> usize {
         let carried = self.step_rule() == crate::assembly::StepRule::Average;
         let mut trials = std::mem::take(&mut self.scratch.friction_trials);
-        for &(k, used, _) in &self.scratch.forces {
+        let forces = std::mem::take(&mut self.scratch.forces);
+        let mut kept = 0;
+        for &(k, used, _) in &forces {
             let k = k as usize;
-            let c = self.state.contacts.contacts[k];
+            let mut c = self.state.contacts.contacts[k];
             let j = self.joint(k);
             let Some(t) = trials.get_mut(k) else {
                 continue;
             };
-            let sliding = c.active && c.state == ContactState::Sliding && c.slide_dir != 0.0;
-            if !(sliding && j.has_shear()) {
+            if !(c.active && j.has_shear()) {
                 *t = FrictionTrial::NONE;
                 continue;
             }
             let share = if carried { self.engaged(k) } else { 1.0 };
-            let residual = -c.slide_dir * share * self.friction_limit(&c, &j) - used;
-            t.next = if same_states && t.residual * residual < 0.0 {
-                used - residual * (used - t.used) / (residual - t.residual)
+            let limit = share * self.friction_limit(&c, &j);
+            // The friction force the trial's normal force asks for against slip in `dir`,
+            // less the force the trial was solved with.
+            let residual = |dir: f64| -dir * limit - used;
+            // Solved sliding in the trial of the same states as the one before (so with
+            // a trial record), locked at its reversal.
+            if same_states && c.state == ContactState::Locked && used != 0.0 {
+                let dir = -used.signum();
+                if t.residual * residual(dir) < 0.0 {
+                    c.state = ContactState::Sliding;
+                    c.slide_dir = dir;
+                    self.state.contacts.contacts[k] = c;
+                    if let Some(f) = self.scratch.flips.get_mut(k) {
+                        *f = f.saturating_sub(1);
+                    }
+                    self.scratch.flipped.retain(|&x| x as usize != k);
+                    kept += 1;
+                }
+            }
+            if !(c.state == ContactState::Sliding && c.slide_dir != 0.0) {
+                *t = FrictionTrial::NONE;
+                continue;
+            }
+            let r = residual(c.slide_dir);
+            t.next = if same_states && t.residual * r < 0.0 {
+                used - r * (used - t.used) / (r - t.residual)
             } else {
                 f64::NAN
             };
             t.used = used;
-            t.residual = residual;
+            t.residual = r;
         }
         self.scratch.friction_trials = trials;
+        self.scratch.forces = forces;
+        kept
     }
 
     /// Whether the current trial moves a sliding contact's friction force from the one
