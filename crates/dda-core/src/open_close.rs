@@ -334,14 +334,13 @@ impl Simulation {
             }
             let share = if carried { self.engaged(k) } else { 1.0 };
             let limit = share * self.friction_limit(&c, &j);
-            // The friction force the trial's normal force asks for against slip in `dir`,
-            // less the force the trial was solved with.
-            let residual = |dir: f64| -dir * limit - used;
+            // The friction force the trial's normal force asks for against slip in `dir`.
+            let asked = |dir: f64| -dir * limit;
             // Solved sliding in the trial of the same states as the one before (so with
             // a trial record), locked at its reversal.
             if same_states && c.state == ContactState::Locked && used != 0.0 {
                 let dir = -used.signum();
-                if t.residual * residual(dir) < 0.0 {
+                if t.residual() * (asked(dir) - used) < 0.0 {
                     c.state = ContactState::Sliding;
                     c.slide_dir = dir;
                     self.state.contacts.contacts[k] = c;
@@ -356,14 +355,15 @@ impl Simulation {
                 *t = FrictionTrial::NONE;
                 continue;
             }
-            let r = residual(c.slide_dir);
-            t.next = if same_states && t.residual * r < 0.0 {
-                used - r * (used - t.used) / (r - t.residual)
+            let now = asked(c.slide_dir);
+            let (r, before) = (now - used, t.residual());
+            t.next = if same_states && before * r < 0.0 {
+                used - r * (used - t.used) / (r - before)
             } else {
                 f64::NAN
             };
             t.used = used;
-            t.residual = r;
+            t.asked = now;
         }
         self.scratch.friction_trials = trials;
         self.scratch.forces = forces;
@@ -381,22 +381,16 @@ impl Simulation {
     fn friction_moved(&self) -> bool {
         let contacts = &self.state.contacts.contacts;
         let scale = &self.scratch.force_scale;
-        let carried = self.step_rule() == crate::assembly::StepRule::Average;
+        let trials = &self.scratch.friction_trials;
+        // The force each sliding contact's trial asked for is in its friction trial
+        // (`Simulation::relax_friction`, after the trial's decisions).
         self.scratch.forces.iter().any(|&(k, used, _)| {
-            let k = k as usize;
-            let c = contacts[k];
-            if !(c.active && c.state == ContactState::Sliding && c.slide_dir != 0.0) {
+            let Some(t) = trials.get(k as usize).filter(|t| !t.asked.is_nan()) else {
                 return false;
-            }
-            let j = self.joint(k);
-            if !j.has_shear() {
-                return false;
-            }
-            let share = if carried { self.engaged(k) } else { 1.0 };
-            let now = -c.slide_dir * share * self.friction_limit(&c, &j);
-            let change = (now - used).abs();
-            change > SHARE_TOLERANCE * now.abs().max(used.abs())
-                && change > decision_band(scale, c.key)
+            };
+            let change = (t.asked - used).abs();
+            change > SHARE_TOLERANCE * t.asked.abs().max(used.abs())
+                && change > decision_band(scale, contacts[k as usize].key)
         })
     }
 
@@ -558,8 +552,9 @@ impl Simulation {
 pub(crate) struct FrictionTrial {
     /// The friction force the trial was solved with, N (signed along the shear row).
     used: f64,
-    /// The force its normal force in the trial asked for, less `used`, N.
-    residual: f64,
+    /// The force its normal force in the trial asked for, N; NaN: no trial (the contact
+    /// did not slide in it).
+    asked: f64,
     /// The force the next trial takes, N; NaN: the one its normal force asks for.
     next: f64,
 }
@@ -568,9 +563,14 @@ impl FrictionTrial {
     /// No trial.
     pub(crate) const NONE: FrictionTrial = FrictionTrial {
         used: f64::NAN,
-        residual: f64::NAN,
+        asked: f64::NAN,
         next: f64::NAN,
     };
+
+    /// How far the force the trial asked for is from the one it was solved with, N.
+    fn residual(&self) -> f64 {
+        self.asked - self.used
+    }
 
     /// The force the next trial takes at a contact sliding in direction `dir`, where
     /// the iteration set one that resists that direction.
