@@ -12,7 +12,8 @@
 use dda_geom::test_support as support;
 
 use dda::bench::{Layout, Masonry};
-use dda::core::{RunOptions, Simulation};
+use dda::contact::ContactKey;
+use dda::core::{Format, RunOptions, Scene, Simulation};
 use proptest::prelude::*;
 
 /// What a run did: the smallest step over the initial one, each block's largest move
@@ -213,6 +214,84 @@ fn the_issue_wall_and_grid_stand_for_a_second() {
             );
             let moved = r.moved_along.max(r.moved_across);
             assert!(moved < 5e-3, "{detector} {m:?}: moved {moved} m");
+        }
+    }
+}
+
+/// An 8 x 8 grid of equal 0.5 m blocks between two fixed walls that fit it exactly, on a
+/// fixed base, friction 5 and 30 degrees, every detector. Where four blocks meet, each
+/// corner contact can be carried by either block's vertex; the cover detector chose by
+/// the sign of the corners' offset along the joint, a hair either way, and the choice
+/// flipped from step to step: the blocks hopped between the two springs' equilibria and
+/// still moved at 8e-5 m/s after 0.5 s (type-2: 4e-5 m/s; `keep_corners` in
+/// `dda-contact`). At rest, over
+/// the run's second half every step takes one open-close iteration, its closed contacts
+/// change in fewer than half its steps (a hop changes them at every step: 241 and 250 of
+/// 251 under type-2 before), and no block moves faster than the contact law lets a
+/// block at rest move: a thousandth of its force scale (at most the weight of the eight
+/// blocks of its column) acting for the step, 8 DECISION_BAND g dt = 7.8e-5 m/s.
+#[test]
+fn a_grid_between_walls_comes_to_rest() {
+    let rect = |x0: f64, y0: f64, x1: f64, y1: f64, id: &str, fixed: bool| {
+        format!(
+            "[[blocks]]\nid = \"{id}\"\nmaterial = \"rock\"\nfixed = {fixed}\n\
+             vertices = [[{x0}, {y0}], [{x1}, {y0}], [{x1}, {y1}], [{x0}, {y1}]]\n"
+        )
+    };
+    let dt = 1e-3;
+    let at_rest = 8.0 * 1e-3 * 9.81 * dt;
+    for friction in [5.0, 30.0] {
+        for detector in ["cover", "type-1", "type-2"] {
+            let mut text = format!(
+                "name = \"boxed grid\"\n[analysis]\nduration = 0.5\ntime_step = {dt}\n\
+                 max_displacement = 0.001\nnormal_penalty = 1e10\ngravity = [0.0, -9.81]\n\
+                 detector = \"{detector}\"\n[materials.rock]\ndensity = 2500.0\n\
+                 young = 1e10\npoisson = 0.2\n[joints.default]\nfriction_deg = {friction}\n"
+            );
+            text += &rect(-1.0, -1.0, 5.0, 0.0, "base", true);
+            text += &rect(-1.0, 0.0, 0.0, 4.0, "left", true);
+            text += &rect(4.0, 0.0, 5.0, 4.0, "right", true);
+            for j in 0..8 {
+                for i in 0..8 {
+                    let (x, y) = (0.5 * i as f64, 0.5 * j as f64);
+                    text += &rect(x, y, x + 0.5, y + 0.5, &format!("b{j}.{i}"), false);
+                }
+            }
+            let (_, model) = Scene::parse(&text, Format::Toml, "grid.toml").unwrap();
+            let mut sim = Simulation::new(model, RunOptions::default());
+            let closed = |sim: &Simulation| -> Vec<ContactKey> {
+                let set = sim.contacts();
+                set.contacts
+                    .iter()
+                    .filter(|c| c.active && c.state.is_closed())
+                    .map(|c| c.key)
+                    .collect()
+            };
+            let (mut steps, mut iterations, mut last, mut changed) = (0, 0, None, 0);
+            while !sim.finished() {
+                let r = sim.step().unwrap();
+                if r.t > 0.25 {
+                    steps += 1;
+                    iterations += r.oci;
+                    let now = closed(&sim);
+                    if last.as_ref().is_some_and(|l| *l != now) {
+                        changed += 1;
+                    }
+                    last = Some(now);
+                }
+            }
+            let fastest = sim
+                .blocks()
+                .iter()
+                .map(|b| b.velocity[0].hypot(b.velocity[1]))
+                .fold(0.0, f64::max);
+            let case = format!("{detector}, friction {friction}");
+            assert!(fastest < at_rest, "{case}: a block at {fastest} m/s");
+            assert_eq!(iterations, steps, "{case}: iterations of the last steps");
+            assert!(
+                2 * changed < steps,
+                "{case}: closed contacts changed in {changed} of {steps} steps"
+            );
         }
     }
 }

@@ -415,6 +415,10 @@ impl ContactDetector for CoverDetector {
     fn keeps_closed_contacts(&self) -> bool {
         true
     }
+
+    fn keeps_corners(&self) -> bool {
+        true
+    }
 }
 
 #[cfg(test)]

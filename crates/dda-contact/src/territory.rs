@@ -264,6 +264,15 @@ impl ContactDetector for TerritoryDetector {
         }
     }
 
+    /// TB-CD-2 only (our choice, measured on 40 generated jointed masses, 2026-11-28):
+    /// with it TB-CD-2 took as many open-close iterations, a quarter fewer cut steps,
+    /// and its standing masses ended at most at 1e-3 m/s instead of 2e-2; TB-CD-1, whose
+    /// distance territories already keep a grid's corners between walls at rest, took 16%
+    /// more iterations, 58% more cut steps, and one mass that stood fell.
+    fn keeps_corners(&self) -> bool {
+        self.territory == Territory::NormalBounded
+    }
+
     fn detect_pair(
         &self,
         a: &BlockShape,
