@@ -85,7 +85,7 @@ pub trait ContactDetector: Send + Sync + fmt::Debug {
     }
 
     /// Whether a corner contact locked at the end of the previous step keeps its spring
-    /// against its twin, the other block's corner there ([`keep_corners`]).
+    /// against its twin, the other block's corner there (`keep_corners` in this module).
     fn keeps_corners(&self) -> bool {
         false
     }
