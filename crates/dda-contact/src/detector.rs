@@ -175,15 +175,12 @@ fn detect_range(
             );
             if !deep {
                 keep_closed(shapes, before, start, list);
-                if detector.keeps_corners() {
-                    keep_corners(shapes, params, before, &mut list[start..]);
-                }
             }
         } else {
             keep_bonded(shapes, params.d_tol, before, start, list);
-            if detector.keeps_corners() {
-                keep_corners(shapes, params, before, &mut list[start..]);
-            }
+        }
+        if detector.keeps_corners() && !deep {
+            keep_corners(shapes, params, before, &mut list[start..]);
         }
         if list.len() == start {
             continue;
@@ -294,10 +291,11 @@ fn keep_corners(
 ) {
     let slack = CORNER_SLACK * params.d_tol;
     let sin_e = params.sin_theta_e();
+    // `before` is sorted by key (see `detect_range`).
     let locked_before = |key: ContactKey| {
         before
-            .iter()
-            .any(|o| o.key == key && o.active && o.state == ContactState::Locked)
+            .binary_search_by_key(&key, |o| o.key)
+            .is_ok_and(|i| before[i].active && before[i].state == ContactState::Locked)
     };
     for i in 0..mine.len() {
         let k = mine[i].key;
