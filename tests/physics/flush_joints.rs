@@ -218,6 +218,14 @@ fn the_issue_wall_and_grid_stand_for_a_second() {
     }
 }
 
+/// A scene's `[[blocks]]` entry for the rectangle from (x0, y0) to (x1, y1).
+fn rect(x0: f64, y0: f64, x1: f64, y1: f64, id: &str, fixed: bool) -> String {
+    format!(
+        "[[blocks]]\nid = \"{id}\"\nmaterial = \"rock\"\nfixed = {fixed}\n\
+         vertices = [[{x0}, {y0}], [{x1}, {y0}], [{x1}, {y1}], [{x0}, {y1}]]\n"
+    )
+}
+
 /// An 8 x 8 grid of equal 0.5 m blocks between two fixed walls that fit it exactly, on a
 /// fixed base, friction 5 and 30 degrees, every detector. Where four blocks meet, each
 /// corner contact can be carried by either block's vertex; the cover detector chose by
@@ -232,12 +240,6 @@ fn the_issue_wall_and_grid_stand_for_a_second() {
 /// blocks of its column) acting for the step, 8 DECISION_BAND g dt = 7.8e-5 m/s.
 #[test]
 fn a_grid_between_walls_comes_to_rest() {
-    let rect = |x0: f64, y0: f64, x1: f64, y1: f64, id: &str, fixed: bool| {
-        format!(
-            "[[blocks]]\nid = \"{id}\"\nmaterial = \"rock\"\nfixed = {fixed}\n\
-             vertices = [[{x0}, {y0}], [{x1}, {y0}], [{x1}, {y1}], [{x0}, {y1}]]\n"
-        )
-    };
     let dt = 1e-3;
     let at_rest = 8.0 * 1e-3 * 9.81 * dt;
     for friction in [5.0, 30.0] {
@@ -292,6 +294,54 @@ fn a_grid_between_walls_comes_to_rest() {
                 2 * changed < steps,
                 "{case}: closed contacts changed in {changed} of {steps} steps"
             );
+        }
+    }
+}
+
+/// Ten columns of four 1 m blocks side by side on a fixed base, friction 40 degrees,
+/// under gravity tilted by `tilt` towards the last column: a lone column of them topples
+/// beyond atan(1 / 4) = 14.0 degrees. At 18 degrees the outer column's top block turns
+/// by more than 1e-3 rad in 0.5 s under every detector (free of its neighbours, from rest,
+/// the column would turn by (1/2) (M / I) t^2 = 0.031 rad: M = m g (2 sin 18 - 0.5 cos 18)
+/// about its toe, I = m 17 / 3); at 10 degrees it stands, turned by less than 1e-4 rad
+/// (ten times the columns' elastic lean, 1.3e-5 rad measured). Where four blocks meet, the
+/// two that touch only corner to corner overlap by the joints' own compression, each
+/// corner behind both faces of the other; the cover detector kept the springs closed on
+/// both faces, and the vertical one, a strut 2 um deep carrying 42 kN under the outer
+/// column's first joint, held it standing at 16 and 18 degrees (docs/method.md
+/// section 5). The shortest exit keeps one face.
+#[test]
+fn a_grid_of_columns_topples_beyond_its_limit() {
+    for (tilt, topples) in [(10.0f64, false), (18.0, true)] {
+        let (sin, cos) = tilt.to_radians().sin_cos();
+        for detector in ["cover", "type-1", "type-2"] {
+            let mut text = format!(
+                "name = \"columns\"\n[analysis]\nduration = 0.5\ntime_step = 0.001\n\
+                 max_displacement = 0.001\nnormal_penalty = 1e10\n\
+                 gravity = [{}, {}]\ndetector = \"{detector}\"\n[materials.rock]\n\
+                 density = 2500.0\nyoung = 1e10\npoisson = 0.2\n[joints.default]\n\
+                 friction_deg = 40.0\n",
+                9.81 * sin,
+                -9.81 * cos
+            );
+            text += &rect(-1.0, -1.0, 11.0, 0.0, "base", true);
+            for j in 0..4 {
+                for i in 0..10 {
+                    let (x, y) = (i as f64, j as f64);
+                    text += &rect(x, y, x + 1.0, y + 1.0, &format!("b{j}.{i}"), false);
+                }
+            }
+            let (_, model) = Scene::parse(&text, Format::Toml, "columns.toml").unwrap();
+            let top = model.blocks.iter().position(|b| b.id == "b3.9").unwrap();
+            let mut sim = Simulation::new(model, RunOptions::default());
+            sim.run(|_, _| {}).unwrap();
+            let turned = -sim.blocks()[top].rotation;
+            let case = format!("{detector}, {tilt} degrees: turned {turned} rad");
+            if topples {
+                assert!(turned > 1e-3, "{case}");
+            } else {
+                assert!(turned.abs() < 1e-4, "{case}");
+            }
         }
     }
 }

@@ -41,7 +41,9 @@
 //!   follows the face that is deepest at the trial positions ([`follow_deepest`]);
 //!   otherwise a cover closed then stays active while its vertex is behind its edge's
 //!   line, moved to the adjacent edge when the vertex slides past an end of its edge
-//!   and that edge's line is nearer. Found by the
+//!   and that edge's line is nearer; a cover the detector lists but does not choose
+//!   stays only where it chose no other (or the cover carries a bond), so that a vertex
+//!   behind two faces keeps the spring of its shortest exit (eq. 11). Found by the
 //!   hard-pair property tests: a 3 deg wedge at 1 m/s with p = 1e6 and d_tol = 1.2 mm
 //!   went through a 15 deg wedge; a chamfered square's corner slid 13 mm deep past the
 //!   end of the edge it entered and went through; a spinning wedge's tip swept into the

@@ -350,18 +350,25 @@ fn keep_corners(
 /// vertex has left it over an end): the move never lengthens the spring, so it stores no
 /// energy, and the contact stays on the face the vertex entered rather than jump to the
 /// block's far side (a vertex deep in a thin plate is nearer the far face, and a spring
-/// to it pushes the vertex through). One the detector listed but did not choose (the
-/// two faces of a flush joint turned through parallel, so that another cover attains
-/// d_RE2) is made active again while its vertex is behind its edge's line within it.
-/// States are inherited after, where the key is the same.
+/// to it pushes the vertex through). One the detector listed but did not choose is made
+/// active again while its vertex is behind its edge's line within it only where the
+/// detector chose no cover of the pair, or where it carries a bond: where it chose one,
+/// that face of the entrance block is the vertex's shortest exit (eq. 11), and a second
+/// spring on another face is a strut. Two blocks that meet only corner to corner where
+/// four meet (written flush, or pressed together) overlap by the joints' own compression,
+/// each corner behind both faces at the other; kept closed on both, the deeper face's
+/// spring held a column of four blocks standing 4 degrees beyond its toppling limit
+/// (docs/method.md section 5). States are inherited after, where the key is the same.
 fn keep_closed(shapes: &[BlockShape], before: &[Contact], start: usize, list: &mut Vec<Contact>) {
     let listed = list.len();
+    // Whether the detector chose a face of the entrance block for this pair.
+    let chose = list[start..listed].iter().any(|c| c.active);
     for old in before.iter().filter(|o| o.active && o.state.is_closed()) {
         let k = old.key;
         if let Some(c) = list[start..listed].iter_mut().find(|c| c.key == k) {
-            // Listed but not chosen (its faces turned through parallel, so that another
-            // cover attains d_RE2): it stays active while its vertex is behind its edge.
-            if c.d_n < 0.0 && (0.0..=1.0).contains(&c.r) {
+            // Listed but not chosen: where the detector chose another face, the vertex's
+            // shortest exit is through that one.
+            if c.d_n < 0.0 && (0.0..=1.0).contains(&c.r) && (!chose || old.bonded) {
                 c.active = true;
             }
             continue;
