@@ -25,7 +25,8 @@
 //!   separating distance of the paper's intent; the other covers stay in C^L, can be
 //!   active as quasi-parallel companions and can be activated by trajectory tracking.
 //!   If no face of E is in C^L the maximum is taken over all of C^L.
-//! - "Attaining d_RE2" is d_n >= d_RE2 - 1e-9 d_tol, so that rounding does not split ties.
+//! - "Attaining d_RE2" is d_n >= d_RE2 - 1e-9 d_tol, so that rounding does not split ties
+//!   ([`ROUNDING`]).
 //! - Only vertices inside the other block's box grown by d_tol are looped over: a vertex
 //!   outside it cannot pass the distance filter, so the result is the same, only cheaper,
 //!   and the cost stays flat as d_tol grows.
@@ -165,6 +166,13 @@ pub(crate) fn d_re2(
     .or_else(|| max(&mut covers.iter().map(|c| c.d_n)))
 }
 
+/// The rounding of detection, as a fraction of d_tol: two covers whose d_n differ by
+/// less attain d_RE2 alike, and a cover kept closed on the face the detector chose may lie
+/// that far past its edge's end (`keep_closed` in the detector module). Our choice: far
+/// below any overlap a penalty leaves, far above the rounding of coordinates (2e-15 of an
+/// edge was seen).
+pub(crate) const ROUNDING: f64 = 1e-9;
+
 /// Marks active the covers attaining d_RE2 (eq. 11) with r in [0, 1], and their
 /// quasi-parallel companions (see the module docs). Returns d_RE2.
 pub(crate) fn choose_active(
@@ -175,7 +183,7 @@ pub(crate) fn choose_active(
     params: &DetectionParams,
 ) -> Option<f64> {
     let d_re2 = d_re2(covers, ids, a, b)?;
-    let tie = d_re2 - 1e-9 * params.d_tol;
+    let tie = d_re2 - ROUNDING * params.d_tol;
     let any_face = covers.iter().any(|c| is_face(c, ids, a, b));
     let sin_e = params.sin_theta_e();
     for k in 0..covers.len() {
@@ -256,7 +264,7 @@ pub(crate) fn deep_covers(
     // last deepest face at the d_n it had. A spring joining beside them would start this
     // deep and store energy from nowhere (a plate's end turning parallel to the face it
     // is pressed into brings its second vertex in at the first one's depth).
-    let tie = d_re2 - 1e-9 * params.d_tol;
+    let tie = d_re2 - ROUNDING * params.d_tol;
     let attains = |m: &Contact| m.d_n >= tie && is_face(m, ids, a, b) && (0.0..=1.0).contains(&m.r);
     for m in all.iter_mut() {
         let closed = before

@@ -174,7 +174,7 @@ fn detect_range(
                 list,
             );
             if !deep {
-                keep_closed(shapes, before, start, list);
+                keep_closed(shapes, pair, params, before, start, list);
             }
         } else {
             keep_bonded(shapes, params.d_tol, before, start, list);
@@ -352,23 +352,57 @@ fn keep_corners(
 /// block's far side (a vertex deep in a thin plate is nearer the far face, and a spring
 /// to it pushes the vertex through). One the detector listed but did not choose is made
 /// active again while its vertex is behind its edge's line within it only where the
-/// detector chose no cover of the pair, or where it carries a bond: where it chose one,
-/// that face of the entrance block is the vertex's shortest exit (eq. 11), and a second
-/// spring on another face is a strut. Two blocks that meet only corner to corner where
-/// four meet (written flush, or pressed together) overlap by the joints' own compression,
-/// each corner behind both faces at the other; kept closed on both, the deeper face's
-/// spring held a column of four blocks standing 4 degrees beyond its toppling limit
-/// (docs/method.md section 5). States are inherited after, where the key is the same.
-fn keep_closed(shapes: &[BlockShape], before: &[Contact], start: usize, list: &mut Vec<Contact>) {
+/// detector chose no cover of the pair, where it carries a bond, or where it lies on a
+/// face the detector chose (quasi-parallel to a chosen cover, as a companion of eq. 11
+/// is). Where the detector chose another face, that face of the entrance block is the
+/// vertex's shortest exit (eq. 11), and a second spring is a strut: two blocks that meet
+/// only corner to corner where four meet (written flush, or pressed together) overlap by
+/// the joints' own compression, each corner behind both faces of the other, and kept
+/// closed on both, the deeper face's spring held a column of four blocks standing 4
+/// degrees beyond its toppling limit. On a chosen face, "within" is to
+/// [`crate::cover::ROUNDING`]: where two blocks' corners meet at a flush joint's end, each
+/// lies on the other's edge at its end, r = 0 or 1 to rounding, and both covers of one
+/// end could lie 2e-15 outside their edges, so that the joint kept its springs at its
+/// other end only: a block resting across the joint of two others rocked them at 6e-6
+/// m/s for ever, the springs at alternate ends from step to step (docs/method.md section
+/// 5). States are inherited after, where the key is the same.
+fn keep_closed(
+    shapes: &[BlockShape],
+    pair: NeighbourPair,
+    params: &DetectionParams,
+    before: &[Contact],
+    start: usize,
+    list: &mut Vec<Contact>,
+) {
     let listed = list.len();
-    // Whether the detector chose a face of the entrance block for this pair.
-    let chose = list[start..listed].iter().any(|c| c.active);
+    let (a, b) = (&shapes[pair.a as usize], &shapes[pair.b as usize]);
+    // The faces of the entrance block the detector chose, before any is kept here.
+    let mut chosen = [DVec2::ZERO; 8];
+    let mut n_chosen = 0;
+    for c in list[start..listed].iter().filter(|c| c.active) {
+        if n_chosen < chosen.len() {
+            chosen[n_chosen] = crate::cover::face_direction(c, pair, a, b);
+            n_chosen += 1;
+        }
+    }
+    let sin_e = params.sin_theta_e();
     for old in before.iter().filter(|o| o.active && o.state.is_closed()) {
         let k = old.key;
         if let Some(c) = list[start..listed].iter_mut().find(|c| c.key == k) {
-            // Listed but not chosen: where the detector chose another face, the vertex's
-            // shortest exit is through that one.
-            if c.d_n < 0.0 && (0.0..=1.0).contains(&c.r) && (!chose || old.bonded) {
+            // Listed but not chosen: kept where the detector chose nothing, where it
+            // carries a bond, or where it lies on a face the detector chose (it is then
+            // off its edge's end by rounding at most); a closed cover on another face
+            // would be a strut beside the vertex's shortest exit.
+            let es = &shapes[k.edge_block as usize];
+            let end = crate::cover::ROUNDING * params.d_tol / es.lengths[k.edge as usize];
+            let d = crate::cover::face_direction(c, pair, a, b);
+            let on_chosen = chosen[..n_chosen]
+                .iter()
+                .any(|m| d.dot(*m) > 0.0 && d.perp_dot(*m).abs() <= sin_e);
+            if c.d_n < 0.0
+                && (-end..=1.0 + end).contains(&c.r)
+                && (n_chosen == 0 || old.bonded || on_chosen)
+            {
                 c.active = true;
             }
             continue;
