@@ -122,13 +122,18 @@ pub fn run(root: &Path) -> Result<(), String> {
            where a wrong vertex-edge pair falls within d_tol of the contact at the moment of\n\
            impact. A failure of the paper's that we do not reproduce needs the paper's exact\n\
            configuration, which the text does not give. The evidence, from the same cases\n\
-           with A's approach moved (table below): TB-CD-1 is wrong in 4 of the 15\n\
-           configurations of 4.4a around ours, as the paper found it in its own; in 4.2,\n\
-           4.3a and 4.4c, and TB-CD-2 in 4.4a, our type-based detectors are right wherever\n\
-           the cover detector is.\n\
-           There the paper's failures come from decisions of its type-based code that ours,\n\
-           resolving vertex pairs as Shi's code does, does not make; its text does not say\n\
-           which.\n\
+           with A's approach moved (table below): in 4.4a the type-based detectors are\n\
+           wrong in most of the 15 configurations around ours, as the paper found them in\n\
+           its own; in 4.2, 4.3a and 4.4c they are right wherever the cover detector is.\n\
+           In 4.4a they were right more often (TB-CD-1 in 11, TB-CD-2 in all 15) until\n\
+           a flush joint's end kept its contact under them (2026-11-27, `docs/method.md`\n\
+           section 5): a corner just outside the other block, along its edge and behind\n\
+           its line, keeps the contact Shi's rule picks there, as the end of a compressed\n\
+           joint must (an arch fell without it). That change was found by bisection;\n\
+           how it turns these collisions was not traced.\n\
+           In 4.2, 4.3a and 4.4c the paper's failures come from decisions of its type-based\n\
+           code that ours, resolving vertex pairs as Shi's code does, does not make; its\n\
+           text does not say which.\n\
          - **Energy and penetration in 4.4c.** We made block A small (7.2 kg) so that the\n\
            penalty of 3e6 N/m can stop it within d_tol = 0.01 m at all (90 J over 7.7 mm).\n\
            A block over 12 kg at 5 m/s could not be stopped within d_tol by any detector\n\
