@@ -724,6 +724,36 @@ fn a_block_sliding_on_level_ground_stops_where_friction_stops_it() {
     }
 }
 
+/// A 1 m x 0.5 m block written on a fixed block at d_n = 0 (unsettled, its contacts
+/// unloaded), sliding at 1 m/s, friction 30 degrees, penalty 1e10 N/m, stops after
+/// v^2 / (2 g tan phi) = 0.0883 m within d_max (1 mm, the most a step moves it). Its
+/// first steps bounce it on its penalty springs; each step's friction must be that of
+/// its own normal forces to the end of the open-close iteration's grace
+/// (`open_close::OCI_GRACE`): ended at `max_oci` with the friction of an earlier trial
+/// (196 kN where its normal force carried 25 kN), it lost 0.37 m/s in its first five
+/// steps and stopped after 0.0385 m.
+#[test]
+fn a_block_launched_unsettled_slides_as_far_as_friction_lets_it() {
+    let text = "name = \"launched\"\n[analysis]\nduration = 0.6\ntime_step = 0.001\n\
+        max_displacement = 0.001\nnormal_penalty = 1e10\ngravity = [0.0, -9.81]\n\
+        settle = false\n[materials.rock]\ndensity = 2500.0\nyoung = 1e10\npoisson = 0.2\n\
+        [joints.default]\nfriction_deg = 30.0\n\
+        [[blocks]]\nid = \"ground\"\nmaterial = \"rock\"\nfixed = true\n\
+        vertices = [[-1.0, -1.0], [11.0, -1.0], [11.0, 0.5], [-1.0, 0.5]]\n\
+        [[blocks]]\nid = \"block\"\nmaterial = \"rock\"\nvelocity = [1.0, 0.0]\n\
+        vertices = [[0.5, 0.5], [1.5, 0.5], [1.5, 1.0], [0.5, 1.0]]\n";
+    let (_, model) = Scene::parse(text, Format::Toml, "launched.toml").unwrap();
+    let mut sim = Simulation::new(model, RunOptions::default());
+    let start = sim.blocks()[1].polygon.centroid();
+    sim.run(|_, _| {}).unwrap();
+    let moved = sim.blocks()[1].polygon.centroid().x - start.x;
+    let expected = 1.0 / (2.0 * 9.81 * 30f64.to_radians().tan());
+    assert!(
+        (moved - expected).abs() <= 1e-3,
+        "moved {moved} m, expected {expected} m"
+    );
+}
+
 /// A structure drawn for the tests below: its bricks, how they are laid, and the slope
 /// and friction angles (degrees) it stands on.
 #[derive(Clone, Copy, Debug)]

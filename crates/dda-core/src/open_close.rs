@@ -37,9 +37,10 @@ pub(crate) const MAX_RANK: usize = 96;
 pub(crate) const SHARE_TOLERANCE: f64 = DECISION_BAND;
 
 /// How many times `max_oci` an open-close iteration may run while only contacts with
-/// friction still change state, before its attempt is cut (dt / 3). At `max_oci` an
-/// attempt whose states have converged ends, its friction forces or shares as they
-/// stand (the iterations taken for them alone stop there), and one whose last iteration
+/// friction still change state, or a trial still moves a sliding contact's friction
+/// force, before its attempt is cut (dt / 3), or, where its states have converged, ends
+/// with its friction forces as they stand. At `max_oci` an attempt whose states have
+/// converged ends with its shares as they stand, and one whose last iteration
 /// changed a frictionless contact or activated a cover is cut as before; one whose last
 /// iteration changed only contacts with friction (stick and slip, a turn, opening or
 /// closing) goes on while they change, up to this bound. Such an attempt is kept only
@@ -52,7 +53,13 @@ pub(crate) const SHARE_TOLERANCE: f64 = DECISION_BAND;
 /// asked for and never grew back: dt held down by a few contacts of thousands.
 /// Frictionless scenes (the paper's columns) are left as they were: there a bound of 7
 /// or 12 instead of 6 turned TB-CD-2's 826-block column, a contact it loses for 60 ms
-/// and finds 19 mm deep, into energy created (5, 6, 8, 9 and 10 did not).
+/// and finds 19 mm deep, into energy created (5, 6, 8, 9 and 10 did not). Until
+/// 2026-11-28 friction forces that a trial still moved ended at `max_oci` as they stood:
+/// a block written on a fixed block at d_n = 0 and sliding at 1 m/s (friction 30
+/// degrees, unsettled) ended its first step, at its seventh iteration, with a friction
+/// force of 196 kN taken from a trial where it had pitched onto its front corner, where
+/// its own normal force carried 25 kN, and stopped after 0.0385 m of the 0.0883 m
+/// friction allows.
 pub(crate) const OCI_GRACE: u32 = 3;
 
 impl Simulation {
@@ -214,9 +221,14 @@ impl Simulation {
             }
             // The shares of the step that contacts closing or opening within it act for
             // are taken from the trial before (`Simulation::engaged`, `release`): one more
-            // iteration where this trial moves one of them.
+            // iteration where this trial moves one of them, before `max_oci`. A sliding
+            // contact's friction force is taken from the trial before too, and must be
+            // that of the step's own normal force: one more iteration where this trial
+            // moves one, up to the grace bound (`OCI_GRACE`), where the attempt ends as it
+            // stands.
             if changed == 0 {
-                if it >= max_oci || !(self.shares_moved() || self.friction_moved()) {
+                let friction = self.friction_moved();
+                if it == bound || !friction && (it >= max_oci || !self.shares_moved()) {
                     return Ok((true, it, not_hard));
                 }
                 not_hard += 1;
