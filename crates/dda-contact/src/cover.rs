@@ -193,10 +193,9 @@ pub(crate) fn choose_active(
         }
         let dk = face_direction(&c, ids, a, b);
         let active = covers.iter().any(|m| {
-            m.d_n >= tie && (!any_face || is_face(m, ids, a, b)) && {
-                let dm = face_direction(m, ids, a, b);
-                dk.dot(dm) > 0.0 && dk.perp_dot(dm).abs() <= sin_e
-            }
+            m.d_n >= tie
+                && (!any_face || is_face(m, ids, a, b))
+                && crate::detector::quasi_parallel(dk, face_direction(m, ids, a, b), sin_e)
         });
         covers[k].active = active;
     }

@@ -253,6 +253,13 @@ fn keep_bonded(
     }
 }
 
+/// Whether directions `a` and `b` are parallel within theta_e (`sin_e` its sine) and point
+/// the same way: two faces of the entrance block that are one face (eq. 11's companions),
+/// or, with one of them reversed, two edges that run along each other (a flush joint).
+pub(crate) fn quasi_parallel(a: DVec2, b: DVec2, sin_e: f64) -> bool {
+    a.dot(b) > 0.0 && a.perp_dot(b).abs() <= sin_e
+}
+
 /// How near, as a fraction of d_tol, a vertex must be to a corner of the other block for
 /// their two contacts to be one corner's ([`keep_corners`]). Our choice: a thousandth of
 /// d_tol, 2e-6 m in the grids of [`keep_corners`], twenty-five times the 8e-8 m a step
@@ -314,8 +321,7 @@ fn keep_corners(
         } else {
             continue;
         };
-        let (t, u) = (es.tangents[e], vs.tangents[along]);
-        if t.dot(u) >= 0.0 || t.perp_dot(u).abs() > sin_e {
+        if !quasi_parallel(es.tangents[e], -vs.tangents[along], sin_e) {
             continue;
         }
         let twin = ContactKey {
@@ -376,7 +382,9 @@ fn keep_closed(
 ) {
     let listed = list.len();
     let (a, b) = (&shapes[pair.a as usize], &shapes[pair.b as usize]);
-    // The faces of the entrance block the detector chose, before any is kept here.
+    // The faces of the entrance block the detector chose, before any is kept here (a
+    // pair has a few; beyond the eighth none is kept on account of it, which errs
+    // towards fewer springs).
     let mut chosen = [DVec2::ZERO; 8];
     let mut n_chosen = 0;
     for c in list[start..listed].iter().filter(|c| c.active) {
@@ -398,7 +406,7 @@ fn keep_closed(
             let d = crate::cover::face_direction(c, pair, a, b);
             let on_chosen = chosen[..n_chosen]
                 .iter()
-                .any(|m| d.dot(*m) > 0.0 && d.perp_dot(*m).abs() <= sin_e);
+                .any(|&m| quasi_parallel(d, m, sin_e));
             if c.d_n < 0.0
                 && (-end..=1.0 + end).contains(&c.r)
                 && (n_chosen == 0 || old.bonded || on_chosen)

@@ -310,7 +310,7 @@ const OUTSIDE: f64 = 1e-9;
 
 /// Whether edge directions `a` and `b` are anti-parallel within theta_e (`sin_e` its sine).
 fn flush_edges(a: DVec2, b: DVec2, sin_e: f64) -> bool {
-    a.dot(b) < 0.0 && a.perp_dot(b).abs() <= sin_e
+    crate::detector::quasi_parallel(a, -b, sin_e)
 }
 
 /// Whether an edge at vertex `i` of `p` runs along an edge at vertex `j` of `q` (the

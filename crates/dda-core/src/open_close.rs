@@ -228,7 +228,7 @@ impl Simulation {
             // stands.
             if changed == 0 {
                 let friction = self.friction_moved();
-                if it == bound || !friction && (it >= max_oci || !self.shares_moved()) {
+                if it == bound || (!friction && (it >= max_oci || !self.shares_moved())) {
                     return Ok((true, it, not_hard));
                 }
                 not_hard += 1;
