@@ -23,7 +23,7 @@ use crate::settle::Settling;
 use crate::solver::{BlockSystem, Entry, RankOne, SolverCounters};
 use crate::springs::{HalfStep, Row};
 use crate::state::{BlockState, RunState, StepRecord, Totals};
-use crate::time_step::{DT_FLOOR, MAX_GROWTH, easy_oci, motion_room, step_growth};
+use crate::time_step::{DT_FLOOR, LANDING_SPLIT, MAX_GROWTH, easy_oci, motion_room, step_growth};
 use crate::timing::{Phase, Stopwatch};
 use dda_contact::{
     BlockShape, ContactDetector, ContactSet, DetectionParams, NeighbourPair, NeighbourSearch,
@@ -627,9 +627,18 @@ impl Simulation {
             .flatten()
             .map(|i| i as u32);
         // Land on `duration`; a remainder within 1e-6 of a step is taken with it rather
-        // than left as a sliver step.
+        // than left as a sliver step, and one shorter than one and a half steps is taken
+        // in two equal steps (`LANDING_SPLIT`), so that no step before the end is
+        // shorter than half the one asked for.
         let landing = planned * (1.0 + 1e-6) >= remaining;
-        let mut dt = if landing { remaining } else { planned };
+        let split = !landing && remaining < LANDING_SPLIT * planned;
+        let mut dt = if landing {
+            remaining
+        } else if split {
+            0.5 * remaining
+        } else {
+            planned
+        };
 
         let mut first_attempt = true;
         loop {
@@ -680,6 +689,10 @@ impl Simulation {
                     self.accept(dt, &mut rec, checked)?;
                     if landing {
                         self.state.t = target;
+                    } else if split && rec.cuts == 0 {
+                        // The step was shortened to land, not for its difficulty: the
+                        // step asked for stands (as it does after landing).
+                        self.state.dt = self.state.dt.max(dt * growth).min(dt0);
                     } else {
                         self.state.dt = (dt * growth).min(dt0);
                     }

@@ -145,6 +145,32 @@ fn free_fall_is_exact() {
     );
 }
 
+/// A run whose end leaves less than one and a half steps after its last whole one
+/// takes the rest in two equal steps, never a step and a sliver: 0.052 s at 0.01 s is
+/// four steps of 0.01 and two of 0.006 (not 0.01 and 0.002), the fall still exact.
+#[test]
+fn a_short_remainder_is_taken_in_two_equal_steps() {
+    let mut a = analysis(0.052, 0.01, 1.0, 1e9);
+    a.gravity = Some([0.0, -9.81]);
+    let b = rect("b", 0.0, 0.0, 1.0, 0.5);
+    let scene = scene("free-fall", a, rock(2600.0, 1e9), BTreeMap::new(), vec![b]);
+    let model = scene.validate().expect("valid scene");
+    let mut sim = Simulation::new(model, RunOptions::default());
+    let mut steps = Vec::new();
+    sim.run(|_, rec| steps.push(rec.dt)).expect("run completes");
+    let expected = [0.01, 0.01, 0.01, 0.01, 0.006, 0.006];
+    assert_eq!(steps.len(), expected.len(), "steps {steps:?}");
+    for (dt, e) in steps.iter().zip(expected) {
+        // The remainder is 0.052 less a sum of four steps: rounding of 1e-17 s.
+        assert!((dt - e).abs() <= 1e-15, "steps {steps:?}");
+    }
+    assert_eq!(sim.time(), 0.052);
+    let t = sim.time();
+    let y = 0.25 - 0.5 * 9.81 * t * t;
+    let c = centroid(&sim, 0);
+    assert!((c.y - y).abs() <= 1e-9, "y {} vs {y}", c.y);
+}
+
 /// A fixed incline at `deg` and a unit square resting on it, both built from the same
 /// unit vectors so that the slider starts exactly touching.
 /// One unknown of a step's motion under Newmark's gamma = 1 and `beta` (Shi's rule at
