@@ -23,7 +23,8 @@ use dda::report::{
     frame_view, history_row, measurement_rows, shown,
 };
 use dda_core::{
-    Checkpoint, HeldBy, RunOptions, Scene, SettlingSummary, Simulation, StepRecord, Summary,
+    Checkpoint, HeldBy, RunOptions, Scene, SettleProgress, SettlingSummary, Simulation, StepRecord,
+    Summary,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
@@ -197,6 +198,35 @@ const TABLES: [&str; 2] = ["measurements.csv", "bolts.csv"];
 /// terminal (in place of the progress bar): a batch job's log says how far a long run
 /// has come.
 const PROGRESS_EVERY: std::time::Duration = std::time::Duration::from_secs(30);
+
+/// The progress bar of the run's steps: simulated time against the duration, and the
+/// wall time left at the pace so far. (Its position counts thousandths of the duration:
+/// a rate of them would mean nothing to a user.)
+fn run_style() -> ProgressStyle {
+    ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {msg}  (eta {eta})")
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> ")
+}
+
+/// How far the settling has come, as the terminal shows it: static steps, their size
+/// against the settling's own, and how far the motion is from steady (the settling
+/// ends when it changes by 1e-5 of its scale from one step to the next).
+fn settle_progress(p: &SettleProgress) -> String {
+    // A round's first step has no step before it to compare with.
+    let change = if p.change.is_finite() {
+        format!(
+            "the motion changing by {:.1e} of the first step's",
+            p.change
+        )
+    } else {
+        "a new round".to_string()
+    };
+    format!(
+        "settling: {} static steps, dt {:.1e} s (growing to {:.1e} s), {change} (settled at \
+         1e-5)",
+        p.steps, p.dt, p.full_dt
+    )
+}
 
 /// Runs `dda run`.
 pub fn run(args: RunArgs) -> Result<ExitCode, Failure> {
@@ -681,39 +711,38 @@ impl Job {
     ) -> End {
         let signals = &self.signals;
         let mut caught = None;
+        // The settling has no end known in advance: its bar shows how far the motion is
+        // from steady, with no rate or time left.
+        if let Some(bar) = bar {
+            bar.set_style(
+                ProgressStyle::with_template("{elapsed_precise} {msg}")
+                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            );
+        }
         let outcome = self.sim.settle_watched(|p| {
             caught = signals.caught();
             if let Some(bar) = bar {
-                bar.set_message(format!(
-                    "settling: {} static steps, dt {:.1e} s of {:.1e} s",
-                    p.steps, p.dt, p.full_dt
-                ));
+                bar.set_message(settle_progress(p));
                 bar.tick();
             }
             if let Some(last) = logged.as_mut()
                 && last.elapsed() >= PROGRESS_EVERY
             {
                 *last = std::time::Instant::now();
-                // A round's first step has no step before it to compare with.
-                let change = if p.change.is_finite() {
-                    format!(
-                        "the motion changing by {:.1e} of the first step's",
-                        p.change
-                    )
-                } else {
-                    "a new round".to_string()
-                };
                 eprintln!(
-                    "settling: {} static steps, dt {:.1e} s (growing to {:.1e} s), {change} \
-                     (settled at 1e-5); {:.0} s of wall time",
-                    p.steps,
-                    p.dt,
-                    p.full_dt,
+                    "{}; {:.0} s of wall time",
+                    settle_progress(p),
                     began.elapsed().as_secs_f64()
                 );
             }
             caught.is_none()
         });
+        // The run's rate and time left count from its first step.
+        if let Some(bar) = bar {
+            bar.set_style(run_style());
+            bar.reset();
+            bar.set_message(format!("t = {:.4} s", self.sim.time()));
+        }
         match outcome {
             Ok(true) => {
                 // This process's settling (none on resume, where it was done before).
@@ -771,13 +800,7 @@ impl Job {
         }
         let bar = if !self.quiet && std::io::stderr().is_terminal() {
             let bar = ProgressBar::new(1000);
-            bar.set_style(
-                ProgressStyle::with_template(
-                    "{elapsed_precise} [{bar:40}] {msg}  ({per_sec}, eta {eta})",
-                )
-                .unwrap_or_else(|_| ProgressStyle::default_bar())
-                .progress_chars("=> "),
-            );
+            bar.set_style(run_style());
             Some(bar)
         } else {
             None
@@ -999,6 +1022,31 @@ enum End {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The settling's progress names its static steps, their size against the
+    /// settling's own and how far the motion is from steady (a round's first step has no
+    /// change to show), and promises no time left.
+    #[test]
+    fn the_settling_s_progress_says_how_far_the_motion_is_from_steady() {
+        let mut p = SettleProgress {
+            steps: 285,
+            change: 3.4e-2,
+            dt: 5.2e-4,
+            full_dt: 1.34e-2,
+        };
+        let line = settle_progress(&p);
+        assert_eq!(
+            line,
+            "settling: 285 static steps, dt 5.2e-4 s (growing to 1.3e-2 s), the motion \
+             changing by 3.4e-2 of the first step's (settled at 1e-5)"
+        );
+        p.change = f64::INFINITY;
+        assert!(
+            settle_progress(&p).contains("a new round"),
+            "{}",
+            settle_progress(&p)
+        );
+    }
 
     /// The animation's frames (its intervals and first instant) hold at most
     /// ANIMATION_CAP numbers unless only the first and last are left, at least 21 frames
