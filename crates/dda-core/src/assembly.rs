@@ -299,14 +299,9 @@ impl Simulation {
             .for_each(terms);
     }
 
-    /// The joint of contact `k` (see [`joint_of`]).
+    /// The joint of contact `k` (see [`joint_of`]), as detection found it for the step.
     pub(crate) fn joint(&self, k: usize) -> JointProps {
-        joint_of(
-            &self.model,
-            &self.bodies,
-            &self.material,
-            &self.state.contacts.contacts[k],
-        )
+        self.scratch.joints[k]
     }
 
     /// Sets the half step of every block for an attempt of size `dt` and the contacts'

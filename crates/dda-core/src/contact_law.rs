@@ -53,7 +53,6 @@ use crate::simulation::Simulation;
 /// grid of equal blocks stand; 1e-3 keeps the force error of a decision to a thousandth
 /// of the forces on the less loaded of its blocks.
 pub(crate) const DECISION_BAND: f64 = 1e-3;
-use crate::assembly::joint_of;
 use crate::scene::JointProps;
 use crate::springs::{contact_length, contact_points};
 use dda_contact::{BlockShape, Contact, ContactState};
@@ -328,9 +327,9 @@ impl Simulation {
         };
         #[cfg(feature = "rayon")]
         let threads = self.threads();
-        let (model, material, sc) = (&self.model, &self.material, &mut self.scratch);
-        let bodies = &self.bodies;
+        let sc = &mut self.scratch;
         let (rows, shapes, half, d) = (&sc.rows, &sc.shapes, &sc.half, &sc.d);
+        let joints = &sc.joints;
         let (sheared, scale, motions) = (&sc.sheared, &sc.force_scale, &sc.motions);
         let sin_e = self.detection.sin_theta_e();
         // Decides the contacts of `contacts` (the list's from `first` on), counting
@@ -353,7 +352,7 @@ impl Simulation {
                         // docs).
                         band: decision_band(scale, key),
                     };
-                    let joint = joint_of(model, bodies, material, &c);
+                    let joint = joints[k];
                     let decide_at = |trial: Trial| {
                         decide(
                             &c,

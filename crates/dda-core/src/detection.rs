@@ -2,6 +2,7 @@
 //! within a skin), each pair's candidate contacts from the detector with states
 //! inherited from the previous step, then the engine's normalisation of states.
 
+use crate::assembly::joint_of;
 use crate::simulation::Simulation;
 use dda_contact::ContactState;
 
@@ -61,6 +62,17 @@ impl Simulation {
             &self.scratch.prev,
             self.threads(),
             &mut self.state.contacts,
+        );
+        // Each candidate's joint, looked up once for the step: the open-close iteration
+        // reads it for every closed contact in every iteration.
+        let (model, bodies, material) = (&self.model, &self.bodies, &self.material);
+        self.scratch.joints.clear();
+        self.scratch.joints.extend(
+            self.state
+                .contacts
+                .contacts
+                .iter()
+                .map(|c| joint_of(model, bodies, material, c)),
         );
         let first = self.state.totals.steps == 0;
         let glue = self.model.joints_by_edge;

@@ -150,6 +150,9 @@ pub(crate) struct Scratch {
     /// Each contact's last friction trial in this attempt's open-close iteration
     /// (`Simulation::relax_friction`).
     pub(crate) friction_trials: Vec<crate::open_close::FrictionTrial>,
+    /// Each candidate contact's joint in this step (`assembly::joint_of`), made at
+    /// detection: a candidate's key, and the bodies of its blocks, hold for the step.
+    pub(crate) joints: Vec<crate::scene::JointProps>,
     /// Each block's force scale for the contact law's decisions: the larger of the
     /// external force on it (weight and point loads) and the largest normal force of its
     /// closed contacts at the step's start; infinite for a fixed block.
@@ -378,6 +381,7 @@ impl Simulation {
                 opened_or_closed: 0,
                 flips: Vec::new(),
                 friction_trials: Vec::new(),
+                joints: Vec::new(),
                 force_scale: Vec::new(),
                 dashpots: Default::default(),
                 diagnosis: None,
