@@ -439,7 +439,10 @@ pub fn run(out: &Path) -> Result<(), String> {
     doc.push_str(
         "### Reading (2026-11-21)\n\n\
          - Free fall: the constant-acceleration scheme is exact for a constant force; the\n  \
-         error is rounding whatever the setting, and d_max only buys steps.\n\
+         error is rounding whatever the setting. Since 2026-11-28 a block in flight, clear\n  \
+         of every other, is not held to d_max (half its gap to the nearest block less d_tol\n  \
+         bounds its motion instead, `docs/method.md` section 7): the lone block takes the\n  \
+         steps asked for at every d_max (before, 207 to 8,197 steps for the same error).\n\
          - Incline: the error is not monotone in d_max (3.2e-3 at 1 mm, 6.8e-5 at 0.5 mm and\n  \
          4.8e-5 at 5 mm). The slider starts on the slope with its springs unloaded, so its\n  \
          two normal springs (2 p in all) ring at omega = sqrt(2 p / m), 877 rad/s at\n  \
@@ -473,7 +476,8 @@ pub fn run(out: &Path) -> Result<(), String> {
          holds, the step it opens; the stiffer the spring against the step (the contact\n  \
          lasts about sqrt(m / p)), the more is lost. Smaller d_max (shorter steps near\n  \
          contact) and softer penalties bring the apex back towards the drop height, at a\n  \
-         cost in steps. This dissipation never creates energy, so the verdict of section 4\n  \
+         cost in steps (those near the base: in flight, clear of it, the block takes the\n  \
+         steps asked for). This dissipation never creates energy, so the verdict of section 4\n  \
          (energy not created) holds, but a user who needs restitution must resolve the\n  \
          contact in time: `impact_steps` below.\n\
          - The damped rule (the default since 2026-11-27: Shi's with its stiff modes\n  \

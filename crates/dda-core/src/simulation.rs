@@ -96,6 +96,10 @@ pub(crate) struct Scratch {
     /// (`Simulation::mark_turn_limited`): those with a contact, a fixed point, a load or
     /// a bolt.
     pub(crate) turn_limited: Vec<bool>,
+    /// Each block's bound on its vertices' motion in this step
+    /// (`Simulation::set_flight_room`): d_max, or for a block in flight half its gap to
+    /// the nearest other block less d_tol, where that is more.
+    pub(crate) flight_room: Vec<f64>,
     /// Each active contact's normal row for the attempt (an inactive one's is a NaN
     /// placeholder until it becomes active: only active contacts' rows are read).
     pub(crate) rows: Vec<Row>,
@@ -354,6 +358,7 @@ impl Simulation {
                 half: Vec::with_capacity(n),
                 in_impact: false,
                 turn_limited: Vec::new(),
+                flight_room: Vec::new(),
                 rows: Vec::new(),
                 springs: Vec::new(),
                 sheared: ShearRows::default(),
@@ -623,6 +628,7 @@ impl Simulation {
         let impact = self.impact_room();
         self.scratch.in_impact = impact.is_finite();
         self.mark_turn_limited();
+        self.set_flight_room();
         let (room, fastest) = self.velocity_room();
         let planned = self.state.dt.min(room).min(impact);
         // The block whose velocity holds the step below the one asked for, if one does.

@@ -4,7 +4,7 @@
 
 use crate::kinematics::point_displacement;
 use crate::simulation::Simulation;
-use dda_geom::DVec2;
+use dda_geom::{Aabb, DVec2};
 
 /// Most OCI iterations of an easy step (after which dt may grow): two thirds of the bound
 /// `max_oci`, rounded up (4 of 6). Our choice; Shi's formulation and the paper fix only the
@@ -102,8 +102,53 @@ impl Simulation {
         }
     }
 
+    /// Sets each block's bound on its vertices' motion in this step
+    /// (`Scratch::flight_room`), after [`Simulation::mark_turn_limited`]: d_max, but for a
+    /// free block in flight (no contact, fixed point, load or bolt) whose current
+    /// velocity would carry a vertex beyond d_max within the step asked for, half its gap
+    /// to the nearest other block (their boxes at step start) less d_tol, where that is
+    /// more. d_max bounds a step's motion so that no contact is missed: blocks closer than
+    /// d_tol at step start are candidates, and no two others can meet within the step.
+    /// Two blocks in flight each moving at most half the gap between them less d_tol do
+    /// not meet either, nor does one moving so towards a block held to d_max (d_max is
+    /// then at most that half), and the update carries a block in flight exactly (a
+    /// ballistic path and its spin, docs/method.md sections 7 and 12). Our choice
+    /// (2026-11-28): a block thrown clear of a mass held every step of the run to d_max
+    /// over its speed.
+    pub(crate) fn set_flight_room(&mut self) {
+        let p = &self.model.params;
+        let room = &mut self.scratch.flight_room;
+        room.clear();
+        room.resize(self.scratch.shapes.len(), p.d_max);
+        for (i, s) in self.scratch.shapes.iter().enumerate() {
+            if self.free[i].is_none() || self.scratch.turn_limited[i] {
+                continue;
+            }
+            let v = &self.state.blocks[i].velocity;
+            let fastest = s
+                .vertices
+                .iter()
+                .map(|&x| point_displacement(x, s.centroid, v).length())
+                .fold(0.0, f64::max);
+            if fastest * self.state.dt <= p.d_max {
+                continue;
+            }
+            let own = s.aabb;
+            let gap = self
+                .scratch
+                .shapes
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != i && !self.removed[j])
+                .map(|(_, o)| box_gap(&own, &o.aabb))
+                .fold(f64::INFINITY, f64::min);
+            room[i] = p.d_max.max(0.5 * (gap - p.d_tol));
+        }
+    }
+
     /// The largest step the blocks' current velocities allow: the smaller of d_max over
-    /// the fastest vertex speed (strain rates included) and theta_max over the fastest
+    /// the fastest vertex speed (strain rates included; a block in flight's bound
+    /// instead of d_max, [`Simulation::set_flight_room`]) and theta_max over the fastest
     /// spin of a block the limit holds ([`Simulation::mark_turn_limited`]), infinite
     /// when nothing moves; and the block that sets it. Driven blocks count: the
     /// ground's motion is held to d_max per step as a free block's.
@@ -121,6 +166,9 @@ impl Simulation {
             for &x in &s.vertices {
                 fastest = fastest.max(point_displacement(x, s.centroid, v).length());
             }
+            // In d_max's terms: the same speed but for a block in flight, whose bound is
+            // more.
+            fastest *= p.d_max / self.scratch.flight_room[i];
             speed = speed.max(fastest);
             let mut share = fastest / p.d_max;
             if self.scratch.turn_limited[i] {
@@ -238,9 +286,10 @@ impl Simulation {
         v_n < -speed || (c.state.is_closed() && v_n > speed)
     }
 
-    /// Largest vertex displacement (first order) and largest |rotation| of a block the
-    /// rotation limit holds ([`Simulation::mark_turn_limited`]) of the trial solution,
-    /// driven blocks included, and the block nearest its limits.
+    /// Largest vertex displacement (first order; a block in flight's in d_max's terms,
+    /// scaled by d_max over its own bound, [`Simulation::set_flight_room`]) and largest
+    /// |rotation| of a block the rotation limit holds ([`Simulation::mark_turn_limited`])
+    /// of the trial solution, driven blocks included, and the block nearest its limits.
     pub(crate) fn largest_motion(&self) -> (f64, f64, Option<usize>) {
         let (mut disp, mut rot) = (0.0f64, 0.0f64);
         let (mut worst, mut worst_ratio) = (None, 0.0);
@@ -260,6 +309,8 @@ impl Simulation {
             for &v in &s.vertices {
                 block_disp = block_disp.max(point_displacement(v, s.centroid, d).length());
             }
+            // In d_max's terms (`Simulation::set_flight_room`).
+            block_disp *= p.d_max / self.scratch.flight_room[i];
             disp = disp.max(block_disp);
             let ratio = (block_disp / p.d_max).max(turn / p.theta_max);
             if ratio > worst_ratio {
@@ -268,6 +319,13 @@ impl Simulation {
         }
         (disp, rot, worst)
     }
+}
+
+/// The distance between boxes `a` and `b` (0 where they overlap).
+fn box_gap(a: &Aabb, b: &Aabb) -> f64 {
+    let dx = (b.min.x - a.max.x).max(a.min.x - b.max.x).max(0.0);
+    let dy = (b.min.y - a.max.y).max(a.min.y - b.max.y).max(0.0);
+    dx.hypot(dy)
 }
 
 #[cfg(test)]
