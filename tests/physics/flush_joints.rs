@@ -436,13 +436,12 @@ fn voronoi_cells(seed: u64, n: usize, w: f64, h: f64) -> Vec<Vec<DVec2>> {
 /// contact at d_n = 0: the open-close iteration's hard case), every detector: their
 /// joints are flush to rounding and meet three at a junction at angles of every size
 /// (where the grids and walls above meet at right angles). Filling the box, no block can
-/// move but by its
-/// springs' give, so they come to rest: over the run's second half every step takes one
-/// open-close iteration and the closed contacts change in fewer than half of them (a
-/// flicker at a junction changes them at every step); no step falls below 1e-3 of the
-/// one asked for; and no block moves as far as d_tol from where it was written (its
-/// springs, under the weight of the 4 m above, give some 1e-5 m; a block held by none
-/// would fall 1.2 m in the 0.5 s).
+/// move but by its springs' give, so they come to rest: over the run's second half every
+/// step takes one open-close iteration and the closed contacts change in fewer than half
+/// of them (a flicker at a junction changes them at every step); no step falls below
+/// 1e-3 of the one asked for; and no block moves as far as d_tol from where it was
+/// written (its springs, under the weight of the 4 m above, give some 1e-5 m; a block
+/// held by none would fall 1.2 m in the 0.5 s).
 #[test]
 fn random_blocks_filling_a_box_come_to_rest() {
     let (dt, d_tol) = (2e-3, 4e-3);

@@ -2,7 +2,7 @@
 //! open-close iteration does not converge or the motion passes d_max or theta_max, grown
 //! after easy steps. The factors are our choice (`docs/method.md`, section 7).
 
-use crate::kinematics::point_displacement;
+use crate::kinematics::{Vec6, point_displacement};
 use crate::simulation::Simulation;
 use dda_geom::{Aabb, DVec2};
 
@@ -124,12 +124,7 @@ impl Simulation {
             if self.free[i].is_none() || self.scratch.turn_limited[i] {
                 continue;
             }
-            let v = &self.state.blocks[i].velocity;
-            let fastest = s
-                .vertices
-                .iter()
-                .map(|&x| point_displacement(x, s.centroid, v).length())
-                .fold(0.0, f64::max);
+            let fastest = largest_vertex_motion(s, &self.state.blocks[i].velocity);
             if fastest * self.state.dt <= p.d_max {
                 continue;
             }
@@ -162,10 +157,7 @@ impl Simulation {
                 continue;
             }
             let v = &self.state.blocks[i].velocity;
-            let mut fastest = 0.0f64;
-            for &x in &s.vertices {
-                fastest = fastest.max(point_displacement(x, s.centroid, v).length());
-            }
+            let mut fastest = largest_vertex_motion(s, v);
             // In d_max's terms: the same speed but for a block in flight, whose bound is
             // more.
             fastest *= p.d_max / self.scratch.flight_room[i];
@@ -305,10 +297,7 @@ impl Simulation {
                 0.0
             };
             rot = rot.max(turn);
-            let mut block_disp = 0.0f64;
-            for &v in &s.vertices {
-                block_disp = block_disp.max(point_displacement(v, s.centroid, d).length());
-            }
+            let mut block_disp = largest_vertex_motion(s, d);
             // In d_max's terms (`Simulation::set_flight_room`).
             block_disp *= p.d_max / self.scratch.flight_room[i];
             disp = disp.max(block_disp);
@@ -319,6 +308,15 @@ impl Simulation {
         }
         (disp, rot, worst)
     }
+}
+
+/// The largest motion of a vertex of block `s` under `d` (a velocity, or a step's
+/// motion; strain included).
+fn largest_vertex_motion(s: &dda_contact::BlockShape, d: &Vec6) -> f64 {
+    s.vertices
+        .iter()
+        .map(|&x| point_displacement(x, s.centroid, d).length())
+        .fold(0.0, f64::max)
 }
 
 /// The distance between boxes `a` and `b` (0 where they overlap).
