@@ -765,7 +765,11 @@ impl Job {
                                     ", stopped without converging (the run starts from \
                                      its steadiest, step {k})"
                                 ),
-                                (false, None) => ", stopped without converging".to_string(),
+                                (false, None) => {
+                                    ", stopped without converging (the run starts from its \
+                                     last static step)"
+                                        .to_string()
+                                }
                             },
                             done.solver.adverb(),
                         );

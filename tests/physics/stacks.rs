@@ -460,6 +460,62 @@ vertices = {outline}
     }
 }
 
+/// A settling cut off while its mass is still loading does not go back to an early
+/// step. A column of 20 blocks of 0.5 m on a fixed base, d_max 1e-7 m: every static step
+/// is held by d_max below the settling's first (whose inertia is the penalty), where each
+/// block moves by nearly its free fall, so the motion repeats from step to step and the
+/// settling stalls unconverged at its 1,199th step. Its column's top must sink by the
+/// springs' and blocks' compression under the weight above them: summed over the 20
+/// joints (two vertex springs of p each) and blocks (E A / L = E), (210 / 2p + 200 / E)
+/// m g = 1.9e-4 m. A settling that stops unconverged ends at its steadiest step, but no
+/// step below the first counts: before, this one went back to its 675th static step,
+/// its top sunk 5.5e-5 m where its last had sunk 9.7e-5 m (the test fails there).
+#[test]
+fn a_settling_stopped_while_loading_keeps_its_last_step() {
+    let mut text = String::from(
+        r#"
+name = "stack"
+[analysis]
+duration = 0.01
+time_step = 0.0001
+max_displacement = 1e-7
+contact_tolerance = 1e-3
+normal_penalty = 1e10
+gravity = [0.0, -9.81]
+[materials.rock]
+density = 2600.0
+young = 1.0e10
+poisson = 0.25
+[joints.default]
+friction_deg = 30.0
+[[blocks]]
+id = "base"
+material = "rock"
+fixed = true
+vertices = [[-1.0, -1.0], [1.5, -1.0], [1.5, 0.0], [-1.0, 0.0]]
+"#,
+    );
+    for r in 0..20 {
+        let (y0, y1) = (0.5 * f64::from(r), 0.5 * f64::from(r) + 0.5);
+        text.push_str(&format!(
+            "[[blocks]]\nid = \"b{r}\"\nmaterial = \"rock\"\nvertices = [[0.0, {y0}], [0.5, {y0}], [0.5, {y1}], [0.0, {y1}]]\n"
+        ));
+    }
+    let (_, model) = Scene::parse(&text, Format::Toml, "stack.toml").unwrap();
+    let top = model.blocks.len() - 1;
+    let start = model.blocks[top].polygon.centroid();
+    let mut sim = Simulation::new(model, RunOptions::default());
+    assert!(sim.settle_watched(|_| true).unwrap());
+    let settled = sim.settling().unwrap();
+    assert!(!settled.converged, "{settled:?}");
+    assert_eq!(settled.kept_step, None, "{settled:?}");
+    // Loading from above, the top never sinks beyond the full weight's compression.
+    let m_g = 0.25 * 2600.0 * 9.81;
+    let full = m_g * (210.0 / 2e10 + 200.0 / 1e10);
+    let sunk = start.y - sim.blocks()[top].polygon.centroid().y;
+    assert!(sunk > 0.0 && sunk < full, "sunk {sunk} m of {full} m");
+}
+
 /// A wall under `impact_steps`: 4 courses of five 1 m x 0.5 m bricks (E = 1e9 Pa,
 /// p = 1e10 N/m) on 40/30 with `impact_steps = 10`, whose default rule takes the
 /// average-acceleration rule only in the steps an impact holds down, slides as one body
