@@ -1802,3 +1802,40 @@ fn a_resumed_run_names_its_checkpoint_where_the_user_has_it() {
     assert!(err.contains(&named), "{err}");
     assert!(!err.contains(".out.partial"), "{err}");
 }
+
+/// A settling that stops without converging says which static step the run starts from,
+/// on the terminal, in `summary.json` and on the report page. A column of 20 blocks whose
+/// static steps d_max (1e-7 m) holds below the settling's first stalls while still
+/// loading, and has no steadiest step to go back to (docs/method.md section 13;
+/// `tests/physics/stacks.rs`): it starts from its last.
+#[test]
+fn an_unconverged_settling_says_where_the_run_starts() {
+    let dir = scratch("unconverged-settling");
+    let mut text = String::from(
+        "name = \"stack\"\n[analysis]\nduration = 0.001\ntime_step = 0.0001\n\
+         max_displacement = 1e-7\ncontact_tolerance = 1e-3\nnormal_penalty = 1e10\n\
+         gravity = [0.0, -9.81]\nframes = 0\n[materials.rock]\ndensity = 2600.0\n\
+         young = 1.0e10\npoisson = 0.25\n[joints.default]\nfriction_deg = 30.0\n\
+         [[blocks]]\nid = \"base\"\nmaterial = \"rock\"\nfixed = true\n\
+         vertices = [[-1.0, -1.0], [1.5, -1.0], [1.5, 0.0], [-1.0, 0.0]]\n",
+    );
+    for r in 0..20 {
+        let (y0, y1) = (0.5 * f64::from(r), 0.5 * f64::from(r) + 0.5);
+        text.push_str(&format!(
+            "[[blocks]]\nid = \"b{r}\"\nmaterial = \"rock\"\n\
+             vertices = [[0.0, {y0}], [0.5, {y0}], [0.5, {y1}], [0.0, {y1}]]\n"
+        ));
+    }
+    let (out, o) = run_text(&dir, &text);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("stopped without converging (the run starts from its last static step)"),
+        "{stderr}"
+    );
+    let settling = &summary(&out)["settling"];
+    assert_eq!(settling["converged"], false, "{settling}");
+    assert!(settling.get("kept_step").is_none(), "{settling}");
+    let report = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(report.contains("the run starting from its last static step"));
+}

@@ -143,7 +143,9 @@ pub struct SettlingSummary {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub solver: Option<SolverChoice>,
     /// For a settling that did not converge, the static step the run starts from: the
-    /// steadiest, where the motion changed least (docs/method.md section 13).
+    /// steadiest, where the motion changed least, of those not cut below the settling's
+    /// first (docs/method.md section 13); absent where there was none, and the run
+    /// starts from the last.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kept_step: Option<u32>,
 }

@@ -354,10 +354,15 @@ canvas {{ border: 1px solid #ccc; background: #fff; max-width: 100%; }}
                     "{}, {:.3}{}{}",
                     st.static_steps,
                     st.seconds,
-                    if st.converged {
-                        ""
-                    } else {
-                        "; stopped without converging"
+                    match (st.converged, st.kept_step) {
+                        (true, _) => String::new(),
+                        (false, Some(k)) => format!(
+                            "; stopped without converging, the run starting from its \
+                             steadiest, static step {k}"
+                        ),
+                        (false, None) => "; stopped without converging, the run starting \
+                                          from its last static step"
+                            .to_string(),
                     },
                     st.solver
                         .map(|s| format!("; solved {}", s.adverb()))
