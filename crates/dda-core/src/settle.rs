@@ -166,13 +166,6 @@ const SETTLE_CHECK: f64 = 1e-2;
 /// `tests/physics/stacks.rs` slide within their bounds as before).
 const SETTLE_APART: f64 = 0.5;
 
-/// The settling's first static step: the one whose inertia 2 m / dt^2 for the heaviest
-/// free block, of mass `heaviest`, is the normal penalty, at most the settling's own
-/// step `dt0` (see [`Simulation::settle`]).
-fn first_step(heaviest: f64, normal_penalty: f64, dt0: f64) -> f64 {
-    (2.0 * heaviest / normal_penalty).sqrt().min(dt0)
-}
-
 /// What one round of settling did ([`Simulation::relax`]).
 struct Relaxed {
     /// Static steps taken.
@@ -316,7 +309,7 @@ impl Simulation {
         mp.mode = Mode::Static;
         let shortest = (2.0 * heaviest / (SETTLE_INERTIA * mp.normal_penalty)).sqrt();
         mp.dt0 = mp.dt0.max(shortest);
-        let first = first_step(heaviest, mp.normal_penalty, mp.dt0);
+        let first = (2.0 * heaviest / mp.normal_penalty).sqrt().min(mp.dt0);
         mp.duration = f64::from(SETTLE_MAX_STEPS) * mp.dt0;
         mp.impact_steps = None;
         mp.integration = Integration::ConstantAcceleration;
@@ -416,7 +409,7 @@ impl Simulation {
         // stack (the layers above falling with it) and a tall stack runs out of them.
         settling.close_touching = true;
         let supplied = settling.state.energy.supplied;
-        let mut round = settling.relax(SETTLE_MAX_STEPS, None, None, 0, watch)?;
+        let mut round = settling.relax(SETTLE_MAX_STEPS, first, None, None, 0, watch)?;
         if round.interrupted {
             return Ok(None);
         }
@@ -443,7 +436,8 @@ impl Simulation {
                 break;
             }
             let budget = report.steps.min(SETTLE_MAX_STEPS - report.steps);
-            let next = settling.relax(budget, Some(round.scale), None, report.steps, watch)?;
+            let next =
+                settling.relax(budget, first, Some(round.scale), None, report.steps, watch)?;
             if next.interrupted {
                 return Ok(None);
             }
@@ -463,8 +457,14 @@ impl Simulation {
         if round.converged {
             let settled = settling.state.clone();
             if settling.rewind(&round, &mut moved, report.steps) {
-                let check =
-                    settling.relax(1, Some(round.scale), Some(&round.last), report.steps, watch)?;
+                let check = settling.relax(
+                    1,
+                    first,
+                    Some(round.scale),
+                    Some(&round.last),
+                    report.steps,
+                    watch,
+                )?;
                 if check.interrupted {
                     return Ok(None);
                 }
@@ -491,11 +491,12 @@ impl Simulation {
     /// One round of settling: static steps until the motion converges (see the module
     /// docs), for at most `budget` steps; `scale`, the settling's scale (the largest
     /// motion of its first step, over dt^2 / 2, bounded by [`SETTLE_FREE_FLIGHT`]), once
-    /// known. `watch` is told of every step (`done`
+    /// known; `first_dt`, the settling's first step (below). `watch` is told of every step (`done`
     /// steps came before the round), and stops the round by returning false.
     fn relax(
         &mut self,
         budget: u32,
+        first_dt: f64,
         scale: Option<f64>,
         before: Option<&[DVec2]>,
         done: u32,
@@ -535,14 +536,8 @@ impl Simulation {
         // (a 10,000-block grid settled iteratively, unconverged, kept its 46th static
         // step of 1,379, and its run loaded the mass itself in steps of 2e-5 s where
         // 2e-3 s was asked for). Such a step is no candidate for the steadiest.
-        let heaviest = self
-            .free_blocks
-            .iter()
-            .map(|&i| self.block_mass(i as usize))
-            .fold(0.0, f64::max);
-        let p = &self.model.params;
         // Less a rounding: a step grown back from a cut lands on the first only to it.
-        let loads = first_step(heaviest, p.normal_penalty, p.dt0) * (1.0 - 1e-9);
+        let loads = first_dt * (1.0 - 1e-9);
         for n in 1..=budget {
             if self.finished() {
                 break;
