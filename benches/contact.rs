@@ -1,16 +1,17 @@
 //! Contact-detection benchmarks: per-pair cost of each detector on touching n-gon pairs,
 //! and whole-scene detection (neighbour search + every pair) on a jointed column of about
-//! 826 blocks (10 m x 20 m cut by joint sets at 60 and 15 degrees).
+//! 826 blocks (10 m x 20 m cut by joint sets at 60 and 15 degrees); and the nearest-box
+//! gaps of a rockfall's blocks in flight (`nearest_box`), by the tree and by a scan.
 
 use criterion::measurement::WallTime;
 use criterion::{
     BenchmarkGroup, BenchmarkId, Criterion, Throughput, criterion_group, criterion_main,
 };
 use dda::contact::{
-    BlockShape, ContactSet, DetectionParams, NeighbourPair, detect, detector_by_name,
+    BlockShape, ContactSet, DetectionParams, NearestBox, NeighbourPair, detect, detector_by_name,
     neighbour_pairs,
 };
-use dda::geom::{DVec2, shapes};
+use dda::geom::{Aabb, DVec2, shapes};
 use std::hint::black_box;
 
 const DETECTORS: [&str; 3] = ["cover", "type-1", "type-2"];
@@ -100,5 +101,62 @@ fn bench_scene(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_pairs, bench_scene);
+/// A rockfall's boxes: `n` x `n` blocks of 0.4 m at a pitch of 0.5 m, each column
+/// shifted by up to 4 cm, above a fixed floor as wide as they are (the floor first).
+fn rockfall_boxes(n: usize) -> Vec<Aabb> {
+    let floor = Aabb {
+        min: DVec2::new(-2.0, -2.0),
+        max: DVec2::new(n as f64 * 0.5 + 2.0, 0.0),
+    };
+    let blocks = (0..n * n).map(|k| {
+        let (i, j) = (k / n, k % n);
+        let min = DVec2::new(
+            i as f64 * 0.5 + 0.01 * ((i * 7 + j * 3) % 5) as f64,
+            2.0 + j as f64 * 0.5,
+        );
+        Aabb {
+            min,
+            max: min + DVec2::splat(0.4),
+        }
+    });
+    std::iter::once(floor).chain(blocks).collect()
+}
+
+/// Every box's gap to its nearest other (each block in flight's, as a step asks), by
+/// the trees of [`NearestBox`] (built and asked) and, at the smaller size, by a scan of
+/// every box for each, as the engine did before them.
+fn bench_nearest(c: &mut Criterion) {
+    let mut group = c.benchmark_group("nearest_box");
+    for n in [40usize, 160] {
+        let boxes = rockfall_boxes(n);
+        group.throughput(Throughput::Elements(boxes.len() as u64));
+        group.bench_function(BenchmarkId::new("tree", boxes.len()), |bench| {
+            let mut tree = NearestBox::new();
+            bench.iter(|| {
+                tree.build(black_box(&boxes), |_| true);
+                (0..boxes.len())
+                    .map(|i| tree.nearest_gap(&boxes, i))
+                    .sum::<f64>()
+            })
+        });
+        if n == 40 {
+            group.bench_function(BenchmarkId::new("scan", boxes.len()), |bench| {
+                bench.iter(|| {
+                    let boxes = black_box(&boxes);
+                    (0..boxes.len())
+                        .map(|i| {
+                            (0..boxes.len())
+                                .filter(|&j| j != i)
+                                .map(|j| boxes[i].gap(&boxes[j]))
+                                .fold(f64::INFINITY, f64::min)
+                        })
+                        .sum::<f64>()
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_pairs, bench_scene, bench_nearest);
 criterion_main!(benches);

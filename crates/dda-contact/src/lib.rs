@@ -14,6 +14,7 @@
 mod contact;
 mod cover;
 mod detector;
+mod nearest;
 mod neighbour;
 mod shape;
 mod territory;
@@ -28,6 +29,7 @@ pub use self::detector::{
     ContactDetector, DETECTOR_NAMES, DetectionParams, TrackList, UnknownDetector, detect,
     detector_by_name, track,
 };
+pub use self::nearest::NearestBox;
 pub use self::neighbour::{NeighbourPair, NeighbourSearch, neighbour_pairs};
 pub use self::shape::BlockShape;
 pub use self::territory::{Territory, TerritoryDetector};

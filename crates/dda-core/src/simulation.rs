@@ -26,8 +26,8 @@ use crate::state::{BlockState, RunState, StepRecord, Totals};
 use crate::time_step::{DT_FLOOR, LANDING_SPLIT, MAX_GROWTH, easy_oci, motion_room, step_growth};
 use crate::timing::{Phase, Stopwatch};
 use dda_contact::{
-    BlockShape, ContactDetector, ContactSet, DetectionParams, NeighbourPair, NeighbourSearch,
-    TrackList, detector_by_name,
+    BlockShape, ContactDetector, ContactSet, DetectionParams, NearestBox, NeighbourPair,
+    NeighbourSearch, TrackList, detector_by_name,
 };
 use dda_geom::{Aabb, Motion};
 
@@ -100,6 +100,11 @@ pub(crate) struct Scratch {
     /// (`Simulation::set_flight_room`): d_max, or for a block in flight half its gap to
     /// the nearest other block less d_tol, where that is more.
     pub(crate) flight_room: Vec<f64>,
+    /// The blocks' boxes at step start and a tree of them, for the gap of each block in
+    /// flight to its nearest (`Simulation::set_flight_room`); built only in a step that
+    /// has such a block.
+    pub(crate) flight_boxes: Vec<Aabb>,
+    pub(crate) nearest: NearestBox,
     /// Each active contact's normal row for the attempt (an inactive one's is a NaN
     /// placeholder until it becomes active: only active contacts' rows are read).
     pub(crate) rows: Vec<Row>,
@@ -359,6 +364,8 @@ impl Simulation {
                 in_impact: false,
                 turn_limited: Vec::new(),
                 flight_room: Vec::new(),
+                flight_boxes: Vec::new(),
+                nearest: NearestBox::new(),
                 rows: Vec::new(),
                 springs: Vec::new(),
                 sheared: ShearRows::default(),

@@ -4,7 +4,7 @@
 
 use crate::kinematics::{Vec6, point_displacement};
 use crate::simulation::Simulation;
-use dda_geom::{Aabb, DVec2};
+use dda_geom::DVec2;
 
 /// Most OCI iterations of an easy step (after which dt may grow): two thirds of the bound
 /// `max_oci`, rounded up (4 of 6). Our choice; Shi's formulation and the paper fix only the
@@ -117,27 +117,33 @@ impl Simulation {
     /// over its speed.
     pub(crate) fn set_flight_room(&mut self) {
         let p = &self.model.params;
-        let room = &mut self.scratch.flight_room;
-        room.clear();
-        room.resize(self.scratch.shapes.len(), p.d_max);
-        for (i, s) in self.scratch.shapes.iter().enumerate() {
-            if self.free[i].is_none() || self.scratch.turn_limited[i] {
+        let scratch = &mut self.scratch;
+        scratch.flight_room.clear();
+        scratch.flight_room.resize(scratch.shapes.len(), p.d_max);
+        // The nearest block to each block in flight, from a tree of the boxes made at
+        // the first such block (a scan of every block for each cost N a block in flight).
+        let mut built = false;
+        for (i, s) in scratch.shapes.iter().enumerate() {
+            if self.free[i].is_none() || scratch.turn_limited[i] {
                 continue;
             }
             let fastest = largest_vertex_motion(s, &self.state.blocks[i].velocity);
             if fastest * self.state.dt <= p.d_max {
                 continue;
             }
-            let own = s.aabb;
-            let gap = self
-                .scratch
-                .shapes
-                .iter()
-                .enumerate()
-                .filter(|&(j, _)| j != i && !self.removed[j])
-                .map(|(_, o)| box_gap(&own, &o.aabb))
-                .fold(f64::INFINITY, f64::min);
-            room[i] = p.d_max.max(0.5 * (gap - p.d_tol));
+            if !built {
+                scratch.flight_boxes.clear();
+                scratch
+                    .flight_boxes
+                    .extend(scratch.shapes.iter().map(|s| s.aabb));
+                let removed = &self.removed;
+                scratch
+                    .nearest
+                    .build(&scratch.flight_boxes, |j| !removed[j]);
+                built = true;
+            }
+            let gap = scratch.nearest.nearest_gap(&scratch.flight_boxes, i);
+            scratch.flight_room[i] = p.d_max.max(0.5 * (gap - p.d_tol));
         }
     }
 
@@ -317,13 +323,6 @@ fn largest_vertex_motion(s: &dda_contact::BlockShape, d: &Vec6) -> f64 {
         .iter()
         .map(|&x| point_displacement(x, s.centroid, d).length())
         .fold(0.0, f64::max)
-}
-
-/// The distance between boxes `a` and `b` (0 where they overlap).
-fn box_gap(a: &Aabb, b: &Aabb) -> f64 {
-    let dx = (b.min.x - a.max.x).max(a.min.x - b.max.x).max(0.0);
-    let dy = (b.min.y - a.max.y).max(a.min.y - b.max.y).max(0.0);
-    dx.hypot(dy)
 }
 
 #[cfg(test)]
