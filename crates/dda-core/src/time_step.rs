@@ -120,8 +120,9 @@ impl Simulation {
         let scratch = &mut self.scratch;
         scratch.flight_room.clear();
         scratch.flight_room.resize(scratch.shapes.len(), p.d_max);
-        // The nearest block to each block in flight, from a tree of the boxes made at
-        // the first such block (a scan of every block for each cost N a block in flight).
+        // The nearest block to each block in flight, from trees of the blocks' boxes
+        // built at the first such block (`NearestBox`; a scan of every block for each
+        // cost N a block in flight).
         let mut built = false;
         for (i, s) in scratch.shapes.iter().enumerate() {
             if self.free[i].is_none() || scratch.turn_limited[i] {
