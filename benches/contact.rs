@@ -8,7 +8,7 @@ use criterion::{
     BenchmarkGroup, BenchmarkId, Criterion, Throughput, criterion_group, criterion_main,
 };
 use dda::contact::{
-    BlockShape, ContactSet, DetectionParams, NearestBox, NeighbourPair, detect, detector_by_name,
+    BlockShape, BoxTrees, ContactSet, DetectionParams, NeighbourPair, detect, detector_by_name,
     neighbour_pairs,
 };
 use dda::geom::{Aabb, DVec2, shapes};
@@ -123,7 +123,7 @@ fn rockfall_boxes(n: usize) -> Vec<Aabb> {
 }
 
 /// Every box's gap to its nearest other (each block in flight's, as a step asks), by
-/// the trees of [`NearestBox`] (built and asked) and, at the smaller size, by a scan of
+/// the trees of [`BoxTrees`] (built and asked) and, at the smaller size, by a scan of
 /// every box for each, as the engine did before them.
 fn bench_nearest(c: &mut Criterion) {
     let mut group = c.benchmark_group("nearest_box");
@@ -131,7 +131,7 @@ fn bench_nearest(c: &mut Criterion) {
         let boxes = rockfall_boxes(n);
         group.throughput(Throughput::Elements(boxes.len() as u64));
         group.bench_function(BenchmarkId::new("tree", boxes.len()), |bench| {
-            let mut tree = NearestBox::new();
+            let mut tree = BoxTrees::new();
             bench.iter(|| {
                 tree.build(black_box(&boxes), |_| true);
                 (0..boxes.len())

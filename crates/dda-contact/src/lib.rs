@@ -11,10 +11,10 @@
 //! or a [`TrackList`] made once per step, which finds the same for less work.
 //! The mechanics (springs, Mohr-Coulomb) belong to the engine, not here.
 
+mod box_trees;
 mod contact;
 mod cover;
 mod detector;
-mod nearest;
 mod neighbour;
 mod shape;
 mod territory;
@@ -23,13 +23,13 @@ pub mod tracking;
 #[cfg(test)]
 mod test_util;
 
+pub use self::box_trees::BoxTrees;
 pub use self::contact::{Contact, ContactKey, ContactSet, ContactState, PairContacts};
 pub use self::cover::CoverDetector;
 pub use self::detector::{
     ContactDetector, DETECTOR_NAMES, DetectionParams, TrackList, UnknownDetector, detect,
     detector_by_name, track,
 };
-pub use self::nearest::NearestBox;
 pub use self::neighbour::{NeighbourPair, NeighbourSearch, neighbour_pairs};
 pub use self::shape::BlockShape;
 pub use self::territory::{Territory, TerritoryDetector};

@@ -9,6 +9,7 @@ use crate::scene::{
     invalid,
 };
 use crate::seismic::{GroundMotion, check_samples};
+use dda_contact::BoxTrees;
 use dda_geom::{ConvexPolygon, DVec2, Groups, PolygonError, PolygonOptions, separation};
 use std::borrow::Cow;
 use std::collections::BTreeMap;
@@ -494,6 +495,7 @@ impl Scene {
         let joints_by_edge = blocks
             .iter()
             .any(|b| b.body.is_some() || !b.edge_joints.is_empty());
+        let mut locator = Locator::default();
         let measures = self
             .measure
             .iter()
@@ -503,7 +505,7 @@ impl Scene {
                 if m.id.trim().is_empty() {
                     return Err(invalid(format!("{key}.id"), "must not be empty"));
                 }
-                let at = point_in(&format!("{key}.at"), m.at, &blocks)?;
+                let at = locator.point_in(&format!("{key}.at"), m.at, &blocks)?;
                 Ok(ModelMeasure {
                     id: m.id.clone(),
                     block: at.0,
@@ -530,8 +532,8 @@ impl Scene {
         let mut bolts = Vec::with_capacity(self.bolts.len());
         for (i, b) in self.bolts.iter().enumerate() {
             let key = format!("bolts[{i}]");
-            let from = point_in(&format!("{key}.from"), b.from, &blocks)?;
-            let to = point_in(&format!("{key}.to"), b.to, &blocks)?;
+            let from = locator.point_in(&format!("{key}.from"), b.from, &blocks)?;
+            let to = locator.point_in(&format!("{key}.to"), b.to, &blocks)?;
             if from.0 == to.0 {
                 return Err(invalid(
                     format!("{key}.to"),
@@ -750,30 +752,61 @@ pub(crate) fn no_material(key: &str, name: &str, scene: &Scene) -> Invalid {
     )
 }
 
-/// The block holding `at` (key `key`): the first, in scene order, whose outline contains
-/// it (its boundary included, to 1e-9 of its size), else the first it lies within
-/// [`point_reach`] of (2e-6 m: a point written to 6 decimals on a face that is not level
-/// or upright lies up to 7e-7 m off it, outside the rock as often as in it), and the
-/// point.
-fn point_in(key: &str, at: [f64; 2], blocks: &[ModelBlock]) -> Result<(usize, DVec2), Invalid> {
-    each_within(key, &at, &limits::COORDINATE)?;
-    let p = DVec2::from(at);
-    let holds = |b: &ModelBlock| b.polygon.contains_within(p, 1e-9 * b.polygon.diameter());
-    let near = |b: &ModelBlock| b.polygon.contains_within(p, point_reach(&b.polygon));
-    blocks
-        .iter()
-        .position(holds)
-        .or_else(|| blocks.iter().position(near))
-        .map(|i| (i, p))
-        .ok_or_else(|| {
-            invalid(
-                key,
-                format!(
-                    "({}, {}) lies in no block: a point must be in the rock",
-                    at[0], at[1]
-                ),
-            )
-        })
+/// Finds the blocks that hold measured points and bolts' ends ([`Locator::point_in`]).
+/// The blocks' boxes that the tests of [`Locator::point_in`] can accept a point in
+/// (`ConvexPolygon::reach_bounds`) are put in trees once, at the first point: the blocks
+/// whose boxes hold the point are then tested, in scene order, instead of every block
+/// (4,000 points in a mass of 40,000 blocks took 3.6 s so).
+#[derive(Default)]
+struct Locator {
+    boxes: Vec<dda_geom::Aabb>,
+    trees: Option<BoxTrees>,
+    found: Vec<u32>,
+}
+
+impl Locator {
+    /// The block holding `at` (key `key`): the first, in scene order, whose outline
+    /// contains it (its boundary included, to 1e-9 of its size), else the first it lies
+    /// within [`point_reach`] of (2e-6 m: a point written to 6 decimals on a face that is
+    /// not level or upright lies up to 7e-7 m off it, outside the rock as often as in
+    /// it), and the point.
+    fn point_in(
+        &mut self,
+        key: &str,
+        at: [f64; 2],
+        blocks: &[ModelBlock],
+    ) -> Result<(usize, DVec2), Invalid> {
+        each_within(key, &at, &limits::COORDINATE)?;
+        let p = DVec2::from(at);
+        let boxes = &mut self.boxes;
+        let trees = self.trees.get_or_insert_with(|| {
+            // Each box holds what `near` accepts, and so what `holds` does (its reach
+            // is the smaller, 1e-9 of the size against at least that).
+            boxes.extend((blocks.iter()).map(|b| b.polygon.reach_bounds(point_reach(&b.polygon))));
+            let mut trees = BoxTrees::new();
+            trees.build(boxes, |_| true);
+            trees
+        });
+        trees.containing(boxes, p, &mut self.found);
+        let candidates = self
+            .found
+            .iter()
+            .map(|&i| (i as usize, &blocks[i as usize]));
+        let holds = |b: &ModelBlock| b.polygon.contains_within(p, 1e-9 * b.polygon.diameter());
+        let near = |b: &ModelBlock| b.polygon.contains_within(p, point_reach(&b.polygon));
+        (candidates.clone().find(|(_, b)| holds(b)))
+            .or_else(|| candidates.clone().find(|(_, b)| near(b)))
+            .map(|(i, _)| (i, p))
+            .ok_or_else(|| {
+                invalid(
+                    key,
+                    format!(
+                        "({}, {}) lies in no block: a point must be in the rock",
+                        at[0], at[1]
+                    ),
+                )
+            })
+    }
 }
 
 /// How far from one line two parts' edges may lie and still make a seam, m: the glue's
@@ -1534,4 +1567,109 @@ fn unit_slips(scene: &Scene) -> Vec<Invalid> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Locator, ModelBlock, point_reach};
+    use dda_geom::{ConvexPolygon, DVec2};
+
+    /// The block a scan of every block in scene order gives: the first that holds the
+    /// point, else the first within its reach, as `Locator::point_in` had it before the
+    /// trees.
+    fn scan(p: DVec2, blocks: &[ModelBlock]) -> Option<usize> {
+        let holds = |b: &ModelBlock| b.polygon.contains_within(p, 1e-9 * b.polygon.diameter());
+        let near = |b: &ModelBlock| b.polygon.contains_within(p, point_reach(&b.polygon));
+        blocks
+            .iter()
+            .position(holds)
+            .or_else(|| blocks.iter().position(near))
+    }
+
+    fn block(id: usize, vertices: Vec<DVec2>) -> ModelBlock {
+        ModelBlock {
+            id: format!("b{id}"),
+            material: 0,
+            polygon: ConvexPolygon::new(vertices).expect("convex"),
+            fixed: false,
+            velocity: [0.0; 6],
+            stress: [0.0; 3],
+            loads: Vec::new(),
+            fixed_points: Vec::new(),
+            edge_joints: Vec::new(),
+            body: None,
+            glued: Vec::new(),
+            removed_at: None,
+            driven: false,
+        }
+    }
+
+    /// A grid of unit squares turned 58.7 degrees and written to 6 decimals (faces that
+    /// shared a line no longer quite do), a sliver triangle and a block ten times larger
+    /// beside them: every corner and edge midpoint, and points 1e-6, 1.5e-6 and 3e-6 m
+    /// off each along its normal either way (inside another block's reach, or no
+    /// block's), are found in the same block as the scan finds them, or in none.
+    #[test]
+    fn the_locator_finds_the_block_the_scan_finds() {
+        let (s, c) = 58.7f64.to_radians().sin_cos();
+        let six = |v: f64| (v * 1e6).round() / 1e6;
+        let turn = |x: f64, y: f64| DVec2::new(six(c * x - s * y), six(s * x + c * y));
+        let mut blocks = Vec::new();
+        for i in 0..6 {
+            for j in 0..6 {
+                let (x, y) = (f64::from(i), f64::from(j));
+                blocks.push(block(
+                    blocks.len(),
+                    vec![
+                        turn(x, y),
+                        turn(x + 1.0, y),
+                        turn(x + 1.0, y + 1.0),
+                        turn(x, y + 1.0),
+                    ],
+                ));
+            }
+        }
+        blocks.push(block(
+            blocks.len(),
+            vec![turn(6.0, 0.0), turn(7.0, 0.0), turn(6.0, 0.001)],
+        ));
+        blocks.push(block(
+            blocks.len(),
+            vec![
+                turn(-10.0, 0.0),
+                turn(0.0, 0.0),
+                turn(0.0, 10.0),
+                turn(-10.0, 10.0),
+            ],
+        ));
+        let mut points = Vec::new();
+        for b in &blocks {
+            let p = &b.polygon;
+            for k in 0..p.len() {
+                let (a, e) = p.edge(k);
+                let n = p.normal(k);
+                for q in [a, 0.5 * (a + e)] {
+                    for off in [0.0, 1e-6, -1e-6, 1.5e-6, -1.5e-6, 3e-6, -3e-6] {
+                        points.push(q + n * off);
+                    }
+                }
+            }
+        }
+        let mut locator = Locator::default();
+        let mut found = 0;
+        for (k, &p) in points.iter().enumerate() {
+            let got = locator
+                .point_in("at", [p.x, p.y], &blocks)
+                .ok()
+                .map(|r| r.0);
+            assert_eq!(got, scan(p, &blocks), "point {k} at {p:?}");
+            found += usize::from(got.is_some());
+        }
+        // Both kinds of answer were asked for.
+        assert!(
+            found > 0 && found < points.len(),
+            "{found} of {}",
+            points.len()
+        );
+    }
 }

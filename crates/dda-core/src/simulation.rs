@@ -26,7 +26,7 @@ use crate::state::{BlockState, RunState, StepRecord, Totals};
 use crate::time_step::{DT_FLOOR, LANDING_SPLIT, MAX_GROWTH, easy_oci, motion_room, step_growth};
 use crate::timing::{Phase, Stopwatch};
 use dda_contact::{
-    BlockShape, ContactDetector, ContactSet, DetectionParams, NearestBox, NeighbourPair,
+    BlockShape, BoxTrees, ContactDetector, ContactSet, DetectionParams, NeighbourPair,
     NeighbourSearch, TrackList, detector_by_name,
 };
 use dda_geom::{Aabb, Motion};
@@ -104,7 +104,7 @@ pub(crate) struct Scratch {
     /// flight to its nearest (`Simulation::set_flight_room`); built only in a step that
     /// has such a block.
     pub(crate) flight_boxes: Vec<Aabb>,
-    pub(crate) nearest: NearestBox,
+    pub(crate) nearest: BoxTrees,
     /// Each active contact's normal row for the attempt (an inactive one's is a NaN
     /// placeholder until it becomes active: only active contacts' rows are read).
     pub(crate) rows: Vec<Row>,
@@ -365,7 +365,7 @@ impl Simulation {
                 turn_limited: Vec::new(),
                 flight_room: Vec::new(),
                 flight_boxes: Vec::new(),
-                nearest: NearestBox::new(),
+                nearest: BoxTrees::new(),
                 rows: Vec::new(),
                 springs: Vec::new(),
                 sheared: ShearRows::default(),

@@ -121,7 +121,7 @@ impl Simulation {
         scratch.flight_room.clear();
         scratch.flight_room.resize(scratch.shapes.len(), p.d_max);
         // The nearest block to each block in flight, from trees of the blocks' boxes
-        // built at the first such block (`NearestBox`; a scan of every block for each
+        // built at the first such block (`BoxTrees`; a scan of every block for each
         // cost N a block in flight).
         let mut built = false;
         for (i, s) in scratch.shapes.iter().enumerate() {

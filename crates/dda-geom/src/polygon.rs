@@ -297,6 +297,34 @@ impl ConvexPolygon {
             .all(|(a, c)| (c - a).perp_dot(p - a) >= -eps * (c - a).length())
     }
 
+    /// A box holding every point that [`ConvexPolygon::contains_within`] accepts at
+    /// `eps`: the polygon with each edge's line moved out by eps, whose corners move out
+    /// along their bisectors (by eps / sin(a / 2) at an interior angle a), for a reach
+    /// grown by far more than that test's rounding (1e-6 of eps, and 1e-9 of the
+    /// polygon's size). Unbounded where a corner is too sharp to say (an interior angle
+    /// below some 1e-6 rad).
+    pub fn reach_bounds(&self, eps: f64) -> Aabb {
+        let size = self.aabb().size();
+        let reach = eps * (1.0 + 1e-6) + 1e-9 * size.x.max(size.y);
+        let n = self.len();
+        let mut bounds = Aabb::from_points(&[]);
+        for i in 0..n {
+            let (n0, n1) = (self.normal(i + n - 1), self.normal(i));
+            // The corner's point on both moved lines, c . n0 = c . n1 = reach.
+            let m = 1.0 + n0.dot(n1);
+            if m.is_nan() || m <= 1e-12 {
+                return Aabb {
+                    min: DVec2::splat(f64::NEG_INFINITY),
+                    max: DVec2::splat(f64::INFINITY),
+                };
+            }
+            let c = self.vertices[i] + (n0 + n1) * (reach / m);
+            bounds.min = bounds.min.min(c);
+            bounds.max = bounds.max.max(c);
+        }
+        bounds
+    }
+
     /// Rebuilds a polygon saved from a run, keeping its vertices bit for bit: checks only
     /// that there are at least three, all finite, enclosing a positive area. Polygons a
     /// run produces are affine images of validated ones, which tolerance-based validation

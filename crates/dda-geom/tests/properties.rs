@@ -231,4 +231,47 @@ proptest! {
             prop_assert!((a0.distance(a1) - b0.distance(b1)).abs() <= 16.0 * EPS * (p.diameter() + c.length()));
         }
     }
+
+    /// Every point `contains_within` accepts lies in `reach_bounds`: points along each
+    /// corner's bisector up to and past its mitre point (eps / sin(a / 2) out, where the
+    /// moved lines meet, the farthest an accepted point reaches) and along each moved
+    /// edge line, and the box is no larger than the polygon's grown by the longest
+    /// mitre of its reach and a hundredth (so that an unbounded box fails).
+    #[test]
+    fn the_reach_bounds_hold_every_point_the_reach_accepts(
+        (p, _) in polygon_at(DVec2::new(-7.0, 40.0)),
+        log_eps in -9.0f64..-1.0,
+        ts in prop::collection::vec(0.0f64..1.0, 8),
+    ) {
+        let eps = 10f64.powf(log_eps) * p.diameter();
+        let bounds = p.reach_bounds(eps);
+        let n = p.len();
+        let mut longest: f64 = 0.0;
+        for (i, angle) in p.interior_angles().into_iter().enumerate() {
+            let (n0, n1) = (p.normal(i + n - 1), p.normal(i));
+            let bisector = (n0 + n1).normalize();
+            let mitre = eps / (0.5 * angle).sin();
+            longest = longest.max(mitre);
+            let v = p.vertex(i);
+            let along = p.vertex(i + 1) - v;
+            let points = [0.5, 0.999_999, 1.0, 1.000_001, 1.5]
+                .into_iter()
+                .map(|t| v + bisector * (t * mitre))
+                .chain(ts.iter().map(|&t| v + n1 * eps + along * t));
+            for q in points {
+                if p.contains_within(q, eps) {
+                    prop_assert!(bounds.contains(q), "{:?} accepted outside {:?}", q, bounds);
+                }
+            }
+        }
+        // The reach the bounds are taken for: eps with room for the test's rounding.
+        let size = p.aabb().size();
+        let reach = eps * (1.0 + 1e-6) + 1e-9 * size.x.max(size.y);
+        let grown = p.aabb().expanded(1.01 * longest * reach / eps);
+        prop_assert!(
+            grown.min.x <= bounds.min.x && grown.min.y <= bounds.min.y
+                && bounds.max.x <= grown.max.x && bounds.max.y <= grown.max.y,
+            "{:?} beyond {:?}", bounds, grown
+        );
+    }
 }

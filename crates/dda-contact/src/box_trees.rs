@@ -1,17 +1,21 @@
-//! The nearest other box to a box: trees of bounding boxes over the blocks, built once a
-//! step and asked once for each block in flight, in place of a scan of every block for
-//! each (which costs N times the blocks in flight a step: a rockfall of thousands of
-//! blocks spent more time there than in the rest of its steps).
+//! Trees of bounding boxes over the blocks, for two questions a scan of every block
+//! answers in time N each:
+//! - the nearest other box to a box ([`BoxTrees::nearest_gap`]), asked once a step for
+//!   each block in flight (a scan cost N times the blocks in flight a step: a rockfall of
+//!   thousands of blocks spent more time there than in the rest of its steps);
+//! - the boxes holding a point ([`BoxTrees::containing`]), asked for each measured point
+//!   and bolt end of a scene.
 //!
-//! The answer is exact: the smallest [`Aabb::gap`] over every other box in the trees,
-//! the same number a scan of them all would give, whatever their order.
+//! The answers are exact: the smallest [`Aabb::gap`] over every other box in the trees,
+//! the same number a scan of them all would give, whatever their order; every box that
+//! holds the point.
 //!
 //! The boxes are split by size into classes a factor [`CLASS_RATIO`] apart, one tree
 //! each: a box far larger than its neighbours (a fixed floor under a rockfall, a wall
 //! beside a mass) would otherwise widen every node it falls in, along a whole branch of
 //! the tree, and the queries near it would visit most of that branch.
 
-use dda_geom::Aabb;
+use dda_geom::{Aabb, DVec2};
 
 /// Boxes in a leaf at most.
 const LEAF: usize = 4;
@@ -33,10 +37,11 @@ struct Node {
     count: u32,
 }
 
-/// Trees of bounding boxes, one a size class, for nearest-box queries
-/// ([`NearestBox::nearest_gap`]). Their buffers are kept from one build to the next.
+/// Trees of bounding boxes, one a size class, for nearest-box and point queries
+/// ([`BoxTrees::nearest_gap`], [`BoxTrees::containing`]). Their buffers are kept from
+/// one build to the next.
 #[derive(Clone, Debug, Default)]
-pub struct NearestBox {
+pub struct BoxTrees {
     /// Every tree's nodes; a parent's children are two consecutive nodes.
     nodes: Vec<Node>,
     /// The root node of each class's tree.
@@ -51,7 +56,7 @@ pub struct NearestBox {
     stack: Vec<(f64, u32)>,
 }
 
-impl NearestBox {
+impl BoxTrees {
     /// No trees.
     pub fn new() -> Self {
         Self::default()
@@ -201,6 +206,31 @@ impl NearestBox {
         }
         best
     }
+
+    /// The indices of the boxes of the trees (`boxes` as built) that hold `p`, their
+    /// boundary included, in `out` (cleared first), in increasing order.
+    pub fn containing(&mut self, boxes: &[Aabb], p: DVec2, out: &mut Vec<u32>) {
+        out.clear();
+        self.stack.clear();
+        self.stack.extend(self.roots.iter().map(|&r| (0.0, r)));
+        while let Some((_, k)) = self.stack.pop() {
+            let node = self.nodes[k as usize];
+            if !node.bounds.contains(p) {
+                continue;
+            }
+            if node.count > 0 {
+                let (first, count) = (node.first as usize, node.count as usize);
+                out.extend(
+                    (self.order[first..first + count].iter())
+                        .filter(|&&j| boxes[j as usize].contains(p)),
+                );
+            } else {
+                self.stack.push((0.0, node.first));
+                self.stack.push((0.0, node.first + 1));
+            }
+        }
+        out.sort_unstable();
+    }
 }
 
 /// The box holding the boxes `run` of `boxes` (an inverted empty box for none).
@@ -213,7 +243,7 @@ fn bounds_of(boxes: &[Aabb], run: &[u32]) -> Aabb {
 
 #[cfg(test)]
 mod tests {
-    use super::NearestBox;
+    use super::BoxTrees;
     use dda_geom::{Aabb, DVec2};
     use proptest::prelude::*;
 
@@ -264,12 +294,40 @@ mod tests {
         fn the_tree_finds_the_scan_s_nearest_gap(v in boxes_strategy()) {
             let boxes: Vec<Aabb> = v.iter().map(|p| p.0).collect();
             let include: Vec<bool> = v.iter().map(|p| p.1).collect();
-            let mut tree = NearestBox::new();
+            let mut tree = BoxTrees::new();
             tree.build(&boxes, |j| include[j]);
             for i in 0..boxes.len() {
                 let want = scan(&boxes, &include, i);
                 let got = tree.nearest_gap(&boxes, i);
                 prop_assert_eq!(got.to_bits(), want.to_bits(), "box {}", i);
+            }
+        }
+    }
+
+    proptest! {
+        /// The boxes holding a point are those a scan finds, in increasing order: for
+        /// the corners and centres of the boxes (on their boundaries, and inside) and
+        /// points between them.
+        #[test]
+        fn the_trees_find_the_boxes_holding_a_point(
+            v in boxes_strategy(),
+            extra in prop::collection::vec((-10.0..10.0f64, -10.0..10.0f64), 0..20),
+        ) {
+            let boxes: Vec<Aabb> = v.iter().map(|p| p.0).collect();
+            let include: Vec<bool> = v.iter().map(|p| p.1).collect();
+            let mut tree = BoxTrees::new();
+            tree.build(&boxes, |j| include[j]);
+            let points = (boxes.iter())
+                .flat_map(|b| [b.min, b.max, (b.min + b.max) * 0.5])
+                .chain(extra.iter().map(|&(x, y)| DVec2::new(x, y)));
+            let mut got = Vec::new();
+            for p in points {
+                tree.containing(&boxes, p, &mut got);
+                let want: Vec<u32> = (0..boxes.len())
+                    .filter(|&j| include[j] && boxes[j].contains(p))
+                    .map(|j| j as u32)
+                    .collect();
+                prop_assert_eq!(&got, &want, "point {:?}", p);
             }
         }
     }
@@ -281,7 +339,7 @@ mod tests {
             min: DVec2::ZERO,
             max: DVec2::ONE,
         };
-        let mut tree = NearestBox::new();
+        let mut tree = BoxTrees::new();
         tree.build(&[b], |_| true);
         assert_eq!(tree.nearest_gap(&[b], 0), f64::INFINITY);
         tree.build(&[b, b], |j| j == 0);
