@@ -322,9 +322,20 @@ pub fn expand(scene: &Scene) -> Result<(Scene, Dropped), Invalid> {
         let key = format!("regions[{i}]");
         let shape = &outlines[i];
         let mut joints = Vec::new();
-        let mut estimate = 1.0;
+        // Lines cut a region into about 1 + L + I pieces, L of them crossing it and I
+        // crossing points inside it. Two sets of spacings s and s' at an angle t cross
+        // A |sin t| / (s s') times over an area A; one set's joints cross each other only
+        // where they spread in dip (by up to d either way: at most A sin 2d / (2 s^2),
+        // 2d at most 90 degrees). For two sets at right angles over a rectangle along
+        // them, (1 + n)(1 + m), the grid's cells. Before 2026-11-28 the estimate was the
+        // product of every set's count, which held a 100 m square cut by sets of 0.6,
+        // 0.7 and 1.5 m to 3.3e6 blocks where they make 54,807.
+        let area = shape.area();
+        let (mut lines, mut crossings) = (0.0, 0.0);
+        let mut seen: Vec<&dda_geom::JointFamily> = Vec::new();
         for name in &r.joint_sets {
-            let set = &families[name.as_str()].set;
+            let family = &families[name.as_str()];
+            let set = &family.set;
             let n = set.normal();
             let (lo, hi) = shape
                 .vertices()
@@ -332,10 +343,17 @@ pub fn expand(scene: &Scene) -> Result<(Scene, Dropped), Invalid> {
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
                     (lo.min(n.dot(*v)), hi.max(n.dot(*v)))
                 });
-            estimate *= (hi - lo) / set.spacing + 1.0;
+            lines += (hi - lo) / set.spacing;
+            let spread = (2.0 * family.dip_spread_deg).min(90.0).to_radians();
+            crossings += area * spread.sin() / (2.0 * set.spacing * set.spacing);
+            for other in &seen {
+                let sin = n.perp_dot(other.set.normal()).abs();
+                crossings += area * sin / (set.spacing * other.set.spacing);
+            }
+            seen.push(family);
             joints.extend(joints_of[name.as_str()].iter().cloned());
         }
-        total += estimate;
+        total += 1.0 + lines + crossings;
         if total > limits::MAX_REGION_BLOCKS {
             return Err(invalid(
                 format!("{key}.joint_sets"),

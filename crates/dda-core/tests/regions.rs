@@ -65,6 +65,51 @@ fn a_region_is_cut_into_blocks_named_after_it() {
 /// a known place) cuts the blocks that the offset of that line cuts: here the slope's
 /// bedding (dip 35 degrees, offset 0.3 m) through the point 0.3 m along its normal, and
 /// through that point moved 7 m along the joint. The same blocks, to rounding.
+/// Four persistent sets 1 m apart at 0, 45, 90 and 135 degrees over a 35 m square cross
+/// it 35, 49.5, 35 and 49.5 times: the product of those counts, the estimate that
+/// refused such a mass before 2026-11-28, is 3e6, past the limit of a million blocks,
+/// where lines cut a convex region into at most 1 + L + I pieces (L lines crossing it,
+/// I crossing points inside it, at most n m for two sets of n and m lines): some 6,000.
+/// The mass is cut, into no more pieces than that bound.
+#[test]
+fn four_joint_sets_over_a_mass_are_not_taken_for_a_spacing_in_the_wrong_unit() {
+    let sets: String = [0, 45, 90, 135]
+        .iter()
+        .map(|d| format!("[joint_sets.s{d}]\ndip_deg = {d}.0\nspacing = 1.0\n"))
+        .collect();
+    let text = format!(
+        "name = \"four sets\"\n[analysis]\nduration = 0.1\ntime_step = 0.001\n\
+         max_displacement = 0.001\nnormal_penalty = 1e10\ngravity = [0.0, -9.81]\n\
+         [materials.rock]\ndensity = 2600.0\nyoung = 1e10\npoisson = 0.25\n{sets}\
+         [[regions]]\nid = \"mass\"\nmaterial = \"rock\"\n\
+         vertices = [[0.0, 0.0], [35.0, 0.0], [35.0, 35.0], [0.0, 35.0]]\n\
+         joint_sets = [\"s0\", \"s45\", \"s90\", \"s135\"]\nfixed = true\n\
+         [[blocks]]\nid = \"top\"\nmaterial = \"rock\"\n\
+         vertices = [[0.0, 35.0], [1.0, 35.0], [1.0, 36.0], [0.0, 36.0]]\n"
+    );
+    // Each set's lines across the square: its extent along the set's normal over 1 m.
+    let counts: Vec<f64> = [0.0f64, 45.0, 90.0, 135.0]
+        .iter()
+        .map(|d| {
+            let (s, c) = d.to_radians().sin_cos();
+            35.0 * (s.abs() + c.abs())
+        })
+        .collect();
+    assert!(counts.iter().map(|n| n + 1.0).product::<f64>() > 1e6);
+    let lines: f64 = counts.iter().map(|n| n + 1.0).sum();
+    let crossings: f64 = (0..4)
+        .flat_map(|i| (0..i).map(move |j| (i, j)))
+        .map(|(i, j)| (counts[i] + 1.0) * (counts[j] + 1.0))
+        .sum();
+    let (_, model) = Scene::parse(&text, Format::Toml, "four.toml").unwrap();
+    let pieces = model.blocks.len() - 1;
+    assert!(
+        pieces > 1000 && (pieces as f64) <= 1.0 + lines + crossings,
+        "{pieces} pieces, bound {}",
+        1.0 + lines + crossings
+    );
+}
+
 #[test]
 fn a_set_placed_through_a_point_cuts_as_its_offset_does() {
     let blocks = |text: &str| {
