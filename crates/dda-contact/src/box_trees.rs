@@ -288,6 +288,7 @@ mod tests {
     }
 
     proptest! {
+        #![proptest_config(dda_geom::test_support::config(256))]
         /// Every box's nearest gap is the scan's, to the bit, whether or not the box is
         /// itself in the tree.
         #[test]
@@ -305,6 +306,7 @@ mod tests {
     }
 
     proptest! {
+        #![proptest_config(dda_geom::test_support::config(256))]
         /// The boxes holding a point are those a scan finds, in increasing order: for
         /// the corners and centres of the boxes (on their boundaries, and inside) and
         /// points between them.

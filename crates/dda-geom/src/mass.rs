@@ -794,23 +794,134 @@ fn edge_sets(cell: &Cell, joints: &[Joint], eps: f64) -> Vec<Option<usize>> {
 }
 
 /// The pairs of cells sharing a stretch of intact rock: (cell a, cell b, a's edge, b's
-/// edge), a < b, in ascending order. Cells are paired by a sweep over their boxes.
+/// edge), a < b, in ascending order. Only cells whose boxes are within `eps` of each
+/// other on both axes ([`near_boxes`]) can share one.
 fn glued_pairs(cells: &[Cell], joints: &[Joint], eps: f64) -> Vec<(usize, usize, usize, usize)> {
     let boxes: Vec<Aabb> = cells.iter().map(|c| c.poly.aabb()).collect();
-    let mut order: Vec<usize> = (0..cells.len()).collect();
-    order.sort_by(|&a, &b| boxes[a].min.x.total_cmp(&boxes[b].min.x).then(a.cmp(&b)));
+    let mut out: Vec<_> = near_boxes(&boxes, eps)
+        .into_iter()
+        .filter_map(|(a, b)| {
+            shared_intact(&cells[a], &cells[b], joints, eps).map(|(ea, eb)| (a, b, ea, eb))
+        })
+        .collect();
+    out.sort_unstable();
+    out
+}
+
+/// Boxes spanning more grid cells than this on either axis are paired with every box
+/// directly rather than entered in the grid ([`near_boxes`]).
+const GRID_SPAN: usize = 8;
+
+/// The pairs (a, b), a < b, ascending, of boxes within `eps` of each other along x and
+/// along y: with the boxes ordered by their left sides (ties by index), a pair whose
+/// later box starts no more than `eps` right of the earlier one's right side, and whose
+/// y ranges are no more than `eps` apart. The same pairs, by the same comparisons, as a
+/// sweep along x, which costs N^1.5 over a square mass (every box against the column of
+/// boxes beside it): the boxes grown by `eps` are entered in a grid of cells about their
+/// mean size, each pair is proposed once, by the first cell the two share, and decided
+/// by the sweep's own test.
+fn near_boxes(boxes: &[Aabb], eps: f64) -> Vec<(usize, usize)> {
+    let n = boxes.len();
+    let before = |a: usize, b: usize| {
+        boxes[a]
+            .min
+            .x
+            .total_cmp(&boxes[b].min.x)
+            .then(a.cmp(&b))
+            .is_lt()
+    };
+    // The sweep's test, the earlier box of the two first.
+    let near = |a: usize, b: usize| {
+        let (a, b) = if before(a, b) { (a, b) } else { (b, a) };
+        let (p, q) = (&boxes[a], &boxes[b]);
+        !(q.min.x > p.max.x + eps || q.min.y > p.max.y + eps || p.min.y > q.max.y + eps)
+    };
+    let grown: Vec<Aabb> = boxes.iter().map(|b| b.expanded(eps)).collect();
     let mut out = Vec::new();
-    for (k, &a) in order.iter().enumerate() {
-        for &b in &order[k + 1..] {
-            if boxes[b].min.x > boxes[a].max.x + eps {
-                break;
+    let Some(all) = grown.iter().copied().reduce(|a, b| a.union(&b)) else {
+        return out;
+    };
+    let mean = grown
+        .iter()
+        .map(|b| b.size().x.max(b.size().y))
+        .sum::<f64>()
+        / n as f64;
+    let size = all.size();
+    // Cells about the boxes' mean size, at most some 4 N of them.
+    let mut cell = mean.max(f64::MIN_POSITIVE);
+    while (size.x / cell + 1.0) * (size.y / cell + 1.0) > 4.0 * n as f64 + 16.0 {
+        cell *= 2.0;
+    }
+    if !(cell.is_finite() && size.x.is_finite() && size.y.is_finite()) {
+        // Nothing to index by: every pair by the test.
+        for a in 0..n {
+            out.extend((a + 1..n).filter(|&b| near(a, b)).map(|b| (a, b)));
+        }
+        return out;
+    }
+    let nx = (size.x / cell) as usize + 1;
+    let ny = (size.y / cell) as usize + 1;
+    let index = |v: f64, lo: f64, count: usize| (((v - lo) / cell) as usize).min(count - 1);
+    let range = |b: &Aabb| {
+        (
+            index(b.min.x, all.min.x, nx),
+            index(b.max.x, all.min.x, nx),
+            index(b.min.y, all.min.y, ny),
+            index(b.max.y, all.min.y, ny),
+        )
+    };
+    let ranges: Vec<_> = grown.iter().map(range).collect();
+    let is_large = |i: usize| {
+        let (x0, x1, y0, y1) = ranges[i];
+        x1 - x0 >= GRID_SPAN || y1 - y0 >= GRID_SPAN
+    };
+    let large: Vec<usize> = (0..n).filter(|&i| is_large(i)).collect();
+    // The grid, cell by cell (row-major): the boxes entered in it.
+    let mut starts = vec![0usize; nx * ny + 1];
+    for i in (0..n).filter(|&i| !is_large(i)) {
+        let (x0, x1, y0, y1) = ranges[i];
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                starts[y * nx + x + 1] += 1;
             }
-            if boxes[b].min.y > boxes[a].max.y + eps || boxes[a].min.y > boxes[b].max.y + eps {
-                continue;
+        }
+    }
+    for k in 0..nx * ny {
+        starts[k + 1] += starts[k];
+    }
+    let mut filled = starts.clone();
+    let mut entries = vec![0u32; starts[nx * ny]];
+    for i in (0..n).filter(|&i| !is_large(i)) {
+        let (x0, x1, y0, y1) = ranges[i];
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                entries[filled[y * nx + x]] = i as u32;
+                filled[y * nx + x] += 1;
             }
-            let (lo, hi) = (a.min(b), a.max(b));
-            if let Some((ea, eb)) = shared_intact(&cells[lo], &cells[hi], joints, eps) {
-                out.push((lo, hi, ea, eb));
+        }
+    }
+    for y in 0..ny {
+        for x in 0..nx {
+            let here = &entries[starts[y * nx + x]..starts[y * nx + x + 1]];
+            for (k, &a) in here.iter().enumerate() {
+                for &b in &here[k + 1..] {
+                    let (a, b) = (a as usize, b as usize);
+                    // Proposed by the first cell the two share only.
+                    let (ra, rb) = (ranges[a], ranges[b]);
+                    if (ra.0.max(rb.0), ra.2.max(rb.2)) == (x, y) && near(a, b) {
+                        out.push((a.min(b), a.max(b)));
+                    }
+                }
+            }
+        }
+    }
+    for (k, &a) in large.iter().enumerate() {
+        // A large box against every other box, once for a pair of large ones.
+        for b in
+            (0..n).filter(|&b| b != a && (!is_large(b) || large[..k].binary_search(&b).is_err()))
+        {
+            if near(a, b) {
+                out.push((a.min(b), a.max(b)));
             }
         }
     }
@@ -921,6 +1032,61 @@ fn merge_cells(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    /// The pairs a sweep along x finds, as `glued_pairs` found them before the grid.
+    fn swept(boxes: &[Aabb], eps: f64) -> Vec<(usize, usize)> {
+        let mut order: Vec<usize> = (0..boxes.len()).collect();
+        order.sort_by(|&a, &b| boxes[a].min.x.total_cmp(&boxes[b].min.x).then(a.cmp(&b)));
+        let mut out = Vec::new();
+        for (k, &a) in order.iter().enumerate() {
+            for &b in &order[k + 1..] {
+                if boxes[b].min.x > boxes[a].max.x + eps {
+                    break;
+                }
+                if boxes[b].min.y > boxes[a].max.y + eps || boxes[a].min.y > boxes[b].max.y + eps {
+                    continue;
+                }
+                out.push((a.min(b), a.max(b)));
+            }
+        }
+        out.sort_unstable();
+        out
+    }
+
+    proptest! {
+        #![proptest_config(crate::test_support::config(256))]
+        /// The grid pairs the boxes the sweep pairs: cells of a cut (boxes on a grid of
+        /// 1/8, touching, apart by eps to the bit, overlapping), a few far larger (a
+        /// big piece, in no grid cell) and a few far away.
+        #[test]
+        fn the_grid_pairs_the_boxes_the_sweep_pairs(
+            v in prop::collection::vec(
+                (
+                    prop_oneof![8 => 0.0..10.0f64, 1 => -1e3..1e3f64],
+                    prop_oneof![8 => 0.0..10.0f64, 1 => -1e3..1e3f64],
+                    prop_oneof![8 => 0.0..1.5f64, 1 => 0.0..60.0f64],
+                    prop_oneof![8 => 0.0..1.5f64, 1 => 0.0..60.0f64],
+                ),
+                0..150,
+            ),
+            eps in prop_oneof![Just(0.0), Just(0.125), 0.0..0.3f64],
+            far in any::<bool>(),
+        ) {
+            let s = |x: f64| (x * 8.0).round() / 8.0;
+            // Without boxes far away, the grid's cells stay small and the large boxes
+            // are paired outside it.
+            let near_by = |x: f64| if far { x } else { x.clamp(0.0, 10.0) };
+            let boxes: Vec<Aabb> = v
+                .iter()
+                .map(|&(x, y, w, h)| {
+                    let min = DVec2::new(s(near_by(x)), s(near_by(y)));
+                    Aabb { min, max: min + DVec2::new(s(w), s(h)) }
+                })
+                .collect();
+            prop_assert_eq!(near_boxes(&boxes, eps), swept(&boxes, eps));
+        }
+    }
 
     fn outline(c: &[[f64; 2]]) -> Outline {
         Outline::new(c.iter().map(|&p| DVec2::from(p)).collect()).expect("valid outline")
