@@ -181,11 +181,11 @@ impl BoxTrees {
             if node.count > 0 {
                 let (first, count) = (node.first as usize, node.count as usize);
                 for &j in &self.order[first..first + count] {
-                    let other = &boxes[j as usize];
-                    // The gap is at least the larger axis gap: no nearer where that is not.
-                    let d = own.axis_gaps(other);
+                    // The gap (`Aabb::gap`, d's length) is at least the larger axis
+                    // gap: no nearer where that is not.
+                    let d = own.axis_gaps(&boxes[j as usize]);
                     if j as usize != i && d.x.max(d.y) < best {
-                        best = best.min(own.gap(other));
+                        best = best.min(d.x.hypot(d.y));
                     }
                 }
                 continue;

@@ -84,6 +84,7 @@ pub(crate) struct Scratch {
     pub(crate) saved: Vec<dda_contact::Contact>,
     /// Neighbour pairs within the pattern margin (only when a new pattern is made).
     pub(crate) pattern_pairs: Vec<NeighbourPair>,
+    /// The blocks' boxes at step start (`Simulation::detect_step_start`).
     pub(crate) aabbs: Vec<Aabb>,
     pub(crate) block_pairs: Vec<(u32, u32)>,
     pub(crate) pair_entry: Vec<Option<Entry>>,
@@ -100,10 +101,9 @@ pub(crate) struct Scratch {
     /// (`Simulation::set_flight_room`): d_max, or for a block in flight half its gap to
     /// the nearest other block less d_tol, where that is more.
     pub(crate) flight_room: Vec<f64>,
-    /// The blocks' boxes at step start and a tree of them, for the gap of each block in
+    /// Trees of the blocks' boxes at step start (`aabbs`), for the gap of each block in
     /// flight to its nearest (`Simulation::set_flight_room`); built only in a step that
     /// has such a block.
-    pub(crate) flight_boxes: Vec<Aabb>,
     pub(crate) nearest: BoxTrees,
     /// Each active contact's normal row for the attempt (an inactive one's is a NaN
     /// placeholder until it becomes active: only active contacts' rows are read).
@@ -364,7 +364,6 @@ impl Simulation {
                 in_impact: false,
                 turn_limited: Vec::new(),
                 flight_room: Vec::new(),
-                flight_boxes: Vec::new(),
                 nearest: BoxTrees::new(),
                 rows: Vec::new(),
                 springs: Vec::new(),

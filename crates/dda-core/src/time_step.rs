@@ -120,9 +120,9 @@ impl Simulation {
         let scratch = &mut self.scratch;
         scratch.flight_room.clear();
         scratch.flight_room.resize(scratch.shapes.len(), p.d_max);
-        // The nearest block to each block in flight, from trees of the blocks' boxes
-        // built at the first such block (`BoxTrees`; a scan of every block for each
-        // cost N a block in flight).
+        // The nearest block to each block in flight, from trees of the blocks' boxes at
+        // step start (`Scratch::aabbs`, the detection's) built at the first such block
+        // (`BoxTrees`; a scan of every block for each cost N a block in flight).
         let mut built = false;
         for (i, s) in scratch.shapes.iter().enumerate() {
             if self.free[i].is_none() || scratch.turn_limited[i] {
@@ -133,17 +133,11 @@ impl Simulation {
                 continue;
             }
             if !built {
-                scratch.flight_boxes.clear();
-                scratch
-                    .flight_boxes
-                    .extend(scratch.shapes.iter().map(|s| s.aabb));
                 let removed = &self.removed;
-                scratch
-                    .nearest
-                    .build(&scratch.flight_boxes, |j| !removed[j]);
+                scratch.nearest.build(&scratch.aabbs, |j| !removed[j]);
                 built = true;
             }
-            let gap = scratch.nearest.nearest_gap(&scratch.flight_boxes, i);
+            let gap = scratch.nearest.nearest_gap(&scratch.aabbs, i);
             scratch.flight_room[i] = p.d_max.max(0.5 * (gap - p.d_tol));
         }
     }

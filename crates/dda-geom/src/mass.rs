@@ -875,51 +875,31 @@ fn near_boxes(boxes: &[Aabb], eps: f64) -> Vec<(usize, usize)> {
         let (x0, x1, y0, y1) = ranges[i];
         x1 - x0 >= GRID_SPAN || y1 - y0 >= GRID_SPAN
     };
-    let large: Vec<usize> = (0..n).filter(|&i| is_large(i)).collect();
-    // The grid, cell by cell (row-major): the boxes entered in it.
-    let mut starts = vec![0usize; nx * ny + 1];
+    // Each box not large in the cells it spans, by cell (row-major), then by box.
+    let mut entered: Vec<(usize, u32)> = Vec::new();
     for i in (0..n).filter(|&i| !is_large(i)) {
         let (x0, x1, y0, y1) = ranges[i];
         for y in y0..=y1 {
-            for x in x0..=x1 {
-                starts[y * nx + x + 1] += 1;
-            }
+            entered.extend((x0..=x1).map(|x| (y * nx + x, i as u32)));
         }
     }
-    for k in 0..nx * ny {
-        starts[k + 1] += starts[k];
-    }
-    let mut filled = starts.clone();
-    let mut entries = vec![0u32; starts[nx * ny]];
-    for i in (0..n).filter(|&i| !is_large(i)) {
-        let (x0, x1, y0, y1) = ranges[i];
-        for y in y0..=y1 {
-            for x in x0..=x1 {
-                entries[filled[y * nx + x]] = i as u32;
-                filled[y * nx + x] += 1;
-            }
-        }
-    }
-    for y in 0..ny {
-        for x in 0..nx {
-            let here = &entries[starts[y * nx + x]..starts[y * nx + x + 1]];
-            for (k, &a) in here.iter().enumerate() {
-                for &b in &here[k + 1..] {
-                    let (a, b) = (a as usize, b as usize);
-                    // Proposed by the first cell the two share only.
-                    let (ra, rb) = (ranges[a], ranges[b]);
-                    if (ra.0.max(rb.0), ra.2.max(rb.2)) == (x, y) && near(a, b) {
-                        out.push((a.min(b), a.max(b)));
-                    }
+    entered.sort_unstable();
+    for here in entered.chunk_by(|a, b| a.0 == b.0) {
+        let (x, y) = (here[0].0 % nx, here[0].0 / nx);
+        for (k, &(_, a)) in here.iter().enumerate() {
+            for &(_, b) in &here[k + 1..] {
+                let (a, b) = (a as usize, b as usize);
+                // Proposed by the first cell the two share only.
+                let (ra, rb) = (ranges[a], ranges[b]);
+                if (ra.0.max(rb.0), ra.2.max(rb.2)) == (x, y) && near(a, b) {
+                    out.push((a.min(b), a.max(b)));
                 }
             }
         }
     }
-    for (k, &a) in large.iter().enumerate() {
-        // A large box against every other box, once for a pair of large ones.
-        for b in
-            (0..n).filter(|&b| b != a && (!is_large(b) || large[..k].binary_search(&b).is_err()))
-        {
+    // A large box against every other box, a pair of large ones once.
+    for a in (0..n).filter(|&a| is_large(a)) {
+        for b in (0..n).filter(|&b| b != a && (!is_large(b) || b > a)) {
             if near(a, b) {
                 out.push((a.min(b), a.max(b)));
             }
